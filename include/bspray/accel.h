@@ -1,0 +1,79 @@
+/*
+ * bspray/accel.h — acceleration structures for ray shooting and the queries
+ * on them: closest hit and any hit (point-to-point visibility).
+ *
+ * Life cycle: bsp_accel_build borrows a scene (which must outlive the
+ * structure) and returns an immutable structure that any number of threads
+ * may query at once. Everything a query changes (mailbox stamps, counters)
+ * lives in a bsp_query, one per thread.
+ *
+ * Exactness contract: every method returns, for every ray, the same closest
+ * primitive and a bit-identical t as the naive method (ties at equal t go to
+ * the lowest primitive index), and the same occlusion answer.
+ */
+#ifndef BSPRAY_ACCEL_H
+#define BSPRAY_ACCEL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "bspray/error.h"
+#include "bspray/geom.h"
+#include "bspray/scene.h"
+
+typedef struct bsp_accel bsp_accel;
+typedef struct bsp_query bsp_query;
+
+typedef enum bsp_accel_kind {
+    BSP_ACCEL_NAIVE = 0, /* test every primitive: O(N) per ray, the reference */
+    BSP_ACCEL_KIND_COUNT
+} bsp_accel_kind;
+
+/* Build options; always start from bsp_build_options_defaults(). */
+typedef struct bsp_build_options {
+    bsp_accel_kind kind;
+    int mailbox; /* 1: test each primitive at most once per ray */
+} bsp_build_options;
+
+void bsp_build_options_defaults(bsp_build_options *opts);
+
+/* "naive", ...; NULL for an unknown kind. */
+const char *bsp_accel_kind_name(bsp_accel_kind kind);
+/* Parses a name; returns BSP_ERR_INVALID (with the list of known names in
+ * ERR) for an unknown one. */
+bsp_status bsp_accel_kind_parse(const char *name, bsp_accel_kind *kind, bsp_error *err);
+
+/* Builds a structure over SCENE (borrowed; must outlive it). OPTS may be
+ * NULL for the defaults. On success *OUT owns the structure. */
+bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts,
+                           bsp_accel **out, bsp_error *err);
+void bsp_accel_destroy(bsp_accel *accel);
+const bsp_scene *bsp_accel_scene(const bsp_accel *accel);
+bsp_accel_kind bsp_accel_get_kind(const bsp_accel *accel);
+/* Seconds spent in bsp_accel_build. */
+double bsp_accel_build_seconds(const bsp_accel *accel);
+
+/* Per-query counters, accumulated over every call made with one bsp_query. */
+typedef struct bsp_query_counters {
+    uint64_t rays;            /* queries made */
+    uint64_t isect_tests;     /* ray-primitive tests (N_IT numerator) */
+    uint64_t traversal_steps; /* nodes visited (N_TS numerator) */
+    uint64_t leaves_visited;  /* N_ETS numerator */
+    uint64_t empty_leaves;    /* N_EETS numerator */
+    uint64_t mailbox_hits;    /* tests skipped by the mailbox */
+} bsp_query_counters;
+
+/* Per-thread query state for ACCEL (borrowed). NULL when out of memory. */
+bsp_query *bsp_query_create(const bsp_accel *accel);
+void bsp_query_destroy(bsp_query *query);
+const bsp_query_counters *bsp_query_get_counters(const bsp_query *query);
+void bsp_query_reset_counters(bsp_query *query);
+
+/* Closest hit on RAY within [tmin, tmax]. Returns 1 and fills *HIT, or 0 and
+ * sets hit->prim = BSP_NO_PRIM. */
+int bsp_intersect(const bsp_accel *accel, bsp_query *query, const bsp_ray *ray, bsp_hit *hit);
+
+/* Any hit on RAY within [tmin, tmax]: 1 when something blocks the segment. */
+int bsp_occluded(const bsp_accel *accel, bsp_query *query, const bsp_ray *ray);
+
+#endif /* BSPRAY_ACCEL_H */

@@ -1,0 +1,101 @@
+/*
+ * bspray/render.h — images, the Whitted ray tracer over a scene, and the ray
+ * statistics of a render (with the names of Havran's SPD tables).
+ */
+#ifndef BSPRAY_RENDER_H
+#define BSPRAY_RENDER_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "bspray/accel.h"
+#include "bspray/error.h"
+
+/* --- Images ---------------------------------------------------------------- */
+
+/* An RGB image, 3 floats per pixel, row 0 at the top. Values are linear and
+ * written clamped to [0,1], 8 bits per channel. */
+typedef struct bsp_image {
+    int width, height;
+    float *rgb; /* width * height * 3 */
+} bsp_image;
+
+/* A black image; NULL when out of memory or the size is not positive or is
+ * absurd (more than 2^28 pixels). Free with bsp_image_destroy. */
+bsp_image *bsp_image_create(int width, int height);
+void bsp_image_destroy(bsp_image *img);
+/* PNG through libpng (8-bit RGB). */
+bsp_status bsp_image_write_png(const bsp_image *img, const char *path, bsp_error *err);
+/* Binary PPM (P6, maxval 255). */
+bsp_status bsp_image_write_ppm(const bsp_image *img, const char *path, bsp_error *err);
+/* By extension: .ppm writes PPM, anything else PNG. */
+bsp_status bsp_image_write(const bsp_image *img, const char *path, bsp_error *err);
+/* Reads an 8-bit RGB or RGBA PNG (for tests and tools). */
+bsp_status bsp_image_read_png(const char *path, bsp_image **out, bsp_error *err);
+
+/* --- Ray statistics ----------------------------------------------------------- */
+
+/* Counts of one ray kind. */
+typedef struct bsp_ray_class_stats {
+    uint64_t rays;            /* rays cast */
+    uint64_t hits;            /* rays that hit something (shadow: blocked) */
+    uint64_t isect_tests;     /* ray-primitive intersection tests */
+    uint64_t traversal_steps; /* acceleration structure nodes visited */
+    uint64_t leaves_visited;
+    uint64_t empty_leaves;
+    uint64_t mailbox_hits;
+} bsp_ray_class_stats;
+
+typedef enum bsp_ray_class {
+    BSP_RAY_PRIMARY = 0,
+    BSP_RAY_SHADOW,
+    BSP_RAY_SECONDARY, /* reflected + refracted */
+    BSP_RAY_CLASS_COUNT
+} bsp_ray_class;
+
+/* Statistics of one render. Havran's names:
+ *   PrimaryRay = cls[PRIMARY].rays, UsedIntPrimRay = cls[PRIMARY].hits,
+ *   ScnCoverage = UsedIntPrimRay / PrimaryRay, ShadowRay, UsedIntShadRay,
+ *   SecondaryRay, UsedIntSecRay likewise; AllRays = the sum of rays;
+ *   IntersRequired = the sum of hits. */
+typedef struct bsp_render_stats {
+    bsp_ray_class_stats cls[BSP_RAY_CLASS_COUNT];
+    uint64_t reflected_rays; /* part of SecondaryRay */
+    uint64_t refracted_rays; /* part of SecondaryRay */
+    int width, height, max_depth, threads;
+    double build_seconds;  /* T_B of the structure used */
+    double render_seconds; /* T_TR: wall time of the render */
+} bsp_render_stats;
+
+/* --- Rendering -------------------------------------------------------------------- */
+
+typedef enum bsp_sampling {
+    /* SPD timing protocol: for a file that says resolution 512 512 the image
+     * is 513 x 513 rays through the pixel corners, and the field of view
+     * spans the first to the last ray. An explicit resolution N gives N x N
+     * rays with the same spanning rule. */
+    BSP_SAMPLING_SPD = 0,
+    /* Ordinary convention: N x N pixels, one ray through each pixel centre,
+     * the field of view spanning the outer pixel edges. */
+    BSP_SAMPLING_CENTRES
+} bsp_sampling;
+
+typedef struct bsp_render_options {
+    int width, height; /* 0: from the scene's camera (see bsp_sampling) */
+    int max_depth;     /* ray tree depth: 1 = primary rays only; default 4 */
+    int threads;       /* 0: all cores */
+    bsp_sampling sampling;
+    /* Called now and then from one thread with the share of rows done; may be NULL. */
+    void (*progress)(double done, void *ctx);
+    void *progress_ctx;
+} bsp_render_options;
+
+void bsp_render_options_defaults(bsp_render_options *opts);
+
+/* Renders ACCEL's scene from its camera. On success *OUT owns a new image and
+ * *STATS (if not NULL) holds the statistics. The image is identical whatever
+ * the thread count. */
+bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts, bsp_image **out,
+                      bsp_render_stats *stats, bsp_error *err);
+
+#endif /* BSPRAY_RENDER_H */

@@ -1,0 +1,151 @@
+/*
+ * accel.c — the public front of the acceleration structures: build options,
+ * method names, building through the method's table, and per-thread queries.
+ */
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "accel/accel_internal.h"
+
+static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {"naive"};
+
+double accel_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void bsp_build_options_defaults(bsp_build_options *opts)
+{
+    memset(opts, 0, sizeof *opts);
+    opts->kind = BSP_ACCEL_NAIVE;
+    opts->mailbox = 1;
+}
+
+const char *bsp_accel_kind_name(bsp_accel_kind kind)
+{
+    return (unsigned)kind < BSP_ACCEL_KIND_COUNT ? kind_names[kind] : NULL;
+}
+
+bsp_status bsp_accel_kind_parse(const char *name, bsp_accel_kind *kind, bsp_error *err)
+{
+    for (int k = 0; k < BSP_ACCEL_KIND_COUNT; k++) {
+        if (strcmp(name, kind_names[k]) == 0) {
+            *kind = (bsp_accel_kind)k;
+            return BSP_OK;
+        }
+    }
+    char list[256] = "";
+    for (int k = 0; k < BSP_ACCEL_KIND_COUNT; k++) {
+        if (k)
+            strncat(list, ", ", sizeof list - strlen(list) - 1);
+        strncat(list, kind_names[k], sizeof list - strlen(list) - 1);
+    }
+    return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                     "unknown acceleration method '%s' (known: %s)", name, list);
+}
+
+bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts,
+                           bsp_accel **out, bsp_error *err)
+{
+    *out = NULL;
+    bsp_accel *a = calloc(1, sizeof *a);
+    if (!a)
+        return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    a->scene = scene;
+    if (opts)
+        a->opts = *opts;
+    else
+        bsp_build_options_defaults(&a->opts);
+    double t0 = accel_now();
+    bsp_status st;
+    switch (a->opts.kind) {
+    case BSP_ACCEL_NAIVE:
+        st = naive_build(a, err);
+        break;
+    default:
+        st = error_set(err, BSP_ERR_INVALID, NULL, 0, "unknown acceleration method %d",
+                       (int)a->opts.kind);
+        break;
+    }
+    if (st != BSP_OK) {
+        free(a);
+        return st;
+    }
+    a->build_seconds = accel_now() - t0;
+    *out = a;
+    return BSP_OK;
+}
+
+void bsp_accel_destroy(bsp_accel *a)
+{
+    if (!a)
+        return;
+    if (a->ops && a->ops->destroy)
+        a->ops->destroy(a->impl);
+    free(a);
+}
+
+const bsp_scene *bsp_accel_scene(const bsp_accel *a)
+{
+    return a->scene;
+}
+
+bsp_accel_kind bsp_accel_get_kind(const bsp_accel *a)
+{
+    return a->opts.kind;
+}
+
+double bsp_accel_build_seconds(const bsp_accel *a)
+{
+    return a->build_seconds;
+}
+
+bsp_query *bsp_query_create(const bsp_accel *a)
+{
+    bsp_query *q = calloc(1, sizeof *q);
+    if (!q)
+        return NULL;
+    q->accel = a;
+    size_t n = bsp_scene_prim_count(a->scene);
+    if (a->opts.mailbox && n > 0) {
+        q->stamp = calloc(n, sizeof *q->stamp);
+        if (!q->stamp) {
+            free(q);
+            return NULL;
+        }
+    }
+    return q;
+}
+
+void bsp_query_destroy(bsp_query *q)
+{
+    if (!q)
+        return;
+    free(q->stamp);
+    free(q);
+}
+
+const bsp_query_counters *bsp_query_get_counters(const bsp_query *q)
+{
+    return &q->counters;
+}
+
+void bsp_query_reset_counters(bsp_query *q)
+{
+    memset(&q->counters, 0, sizeof q->counters);
+}
+
+int bsp_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit)
+{
+    q->counters.rays++;
+    return a->ops->intersect(a, q, ray, hit);
+}
+
+int bsp_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
+{
+    q->counters.rays++;
+    return a->ops->occluded(a, q, ray);
+}

@@ -1,0 +1,40 @@
+/*
+ * accel_internal.h — what every acceleration method plugs into: a small table
+ * of operations behind the opaque bsp_accel, and the per-thread bsp_query.
+ */
+#ifndef BSPRAY_ACCEL_INTERNAL_H
+#define BSPRAY_ACCEL_INTERNAL_H
+
+#include "bspray/accel.h"
+#include "scene/scene_internal.h"
+
+typedef struct accel_ops {
+    int (*intersect)(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit);
+    int (*occluded)(const bsp_accel *a, bsp_query *q, const bsp_ray *ray);
+    void (*destroy)(void *impl);
+} accel_ops;
+
+struct bsp_accel {
+    const bsp_scene *scene; /* borrowed */
+    bsp_build_options opts;
+    const accel_ops *ops;
+    void *impl; /* method-specific, owned */
+    double build_seconds;
+};
+
+struct bsp_query {
+    const bsp_accel *accel; /* borrowed */
+    bsp_query_counters counters;
+    /* Mailbox: stamp[prim] == ray_id means prim was already tested with the
+     * current ray. Lives here, never in the shared structure. */
+    uint32_t *stamp;
+    uint32_t ray_id;
+};
+
+/* Builds the naive method (no structure; tests every live primitive). */
+HIDDEN bsp_status naive_build(bsp_accel *a, bsp_error *err);
+
+/* Seconds on a monotonic clock. */
+HIDDEN double accel_now(void);
+
+#endif /* BSPRAY_ACCEL_INTERNAL_H */

@@ -1,0 +1,343 @@
+/*
+ * render.c — the Whitted ray tracer of the SPD, with ray statistics.
+ *
+ * Shading rules (the ones that reproduce Havran's SPD ray counts; see
+ * docs/renderer.md):
+ *   - every surface is hit from both sides; the normals are turned to face
+ *     the incoming ray before shading;
+ *   - one shadow ray goes to every point light on the visible side of the
+ *     surface (dot(N, L) > 0 with the turned geometric normal);
+ *   - a surface with Ks > 0 spawns a reflected ray, one with T > 0 a refracted
+ *     ray (none on total internal reflection), while the ray depth is below
+ *     the maximum (primary rays have depth 1);
+ *   - colour: ambient + Lambert + Phong highlight per unshadowed light, plus
+ *     Ks * reflected + T * refracted; a miss returns the background.
+ *
+ * Epsilon policy: secondary and shadow rays start exactly at the hit point
+ * with tmin = RAY_EPS_REL * (scene scale), directions of unit length; shadow
+ * rays end RAY_EPS_REL * scale before the light.
+ *
+ * Threads take rows from a shared counter; every pixel depends only on its
+ * own rays, so the image is identical for any thread count. Counters live in
+ * per-thread state and are summed at the end.
+ */
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "accel/accel_internal.h"
+#include "geom/vec.h"
+#include "render/camera.h"
+
+/* Relative offset of secondary-ray origins (times the scene scale). */
+#define RAY_EPS_REL 1e-9
+
+void bsp_render_options_defaults(bsp_render_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->max_depth = 4;
+    o->sampling = BSP_SAMPLING_SPD;
+}
+
+typedef struct render_job {
+    const bsp_accel *accel;
+    const bsp_scene *scene;
+    const bsp_render_options *opts;
+    camera_rays cam;
+    bsp_image *img;
+    double eps;             /* absolute offset of secondary rays */
+    double light_intensity; /* per light, and ambient */
+    atomic_int next_row;
+    atomic_int rows_done;
+} render_job;
+
+typedef struct worker {
+    render_job *job;
+    bsp_query *query;
+    bsp_render_stats stats;
+    int is_main; /* reports progress */
+} worker;
+
+/* Adds the query counters spent since BEFORE to class CLS. */
+static void account(worker *w, bsp_ray_class cls, const bsp_query_counters *before)
+{
+    const bsp_query_counters *now = &w->query->counters;
+    bsp_ray_class_stats *c = &w->stats.cls[cls];
+    c->isect_tests += now->isect_tests - before->isect_tests;
+    c->traversal_steps += now->traversal_steps - before->traversal_steps;
+    c->leaves_visited += now->leaves_visited - before->leaves_visited;
+    c->empty_leaves += now->empty_leaves - before->empty_leaves;
+    c->mailbox_hits += now->mailbox_hits - before->mailbox_hits;
+}
+
+static int shadowed(worker *w, bsp_vec3 p, bsp_vec3 light)
+{
+    bsp_vec3 to = v3_sub(light, p);
+    double dist = v3_length(to);
+    bsp_ray r;
+    r.org = p;
+    r.dir = v3_scale(to, 1.0 / dist);
+    r.tmin = w->job->eps;
+    r.tmax = dist - w->job->eps;
+    if (!(r.tmax > r.tmin))
+        return 0; /* the light sits on the surface */
+    bsp_query_counters before = w->query->counters;
+    int blocked = bsp_occluded(w->job->accel, w->query, &r);
+    account(w, BSP_RAY_SHADOW, &before);
+    w->stats.cls[BSP_RAY_SHADOW].rays++;
+    w->stats.cls[BSP_RAY_SHADOW].hits += (uint64_t)blocked;
+    return blocked;
+}
+
+static void trace(worker *w, const bsp_ray *ray, int depth, bsp_ray_class cls, double out[3]);
+
+static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, double out[3])
+{
+    const render_job *job = w->job;
+    const bsp_scene *s = job->scene;
+    const bsp_material *m = bsp_scene_material(s, bsp_scene_prim_material(s, hit->prim));
+    bsp_vec3 ng, ns;
+    bsp_scene_hit_normals(s, ray, hit, &ng, &ns);
+    bsp_vec3 p = ray_at(ray, hit->t);
+    bsp_vec3 d = ray->dir;
+
+    /* Turn the normals toward the incoming ray; remember which side was hit. */
+    int entering = v3_dot(ng, d) < 0.0;
+    if (!entering) {
+        ng = v3_neg(ng);
+        ns = v3_neg(ns);
+    }
+    if (v3_dot(ns, d) > 0.0) /* interpolated normal facing away: use the true one */
+        ns = ng;
+
+    double I = job->light_intensity;
+    for (int c = 0; c < 3; c++)
+        out[c] = I * m->kd * m->color[c];
+
+    bsp_vec3 view = v3_neg(d);
+    for (size_t l = 0; l < bsp_scene_light_count(s); l++) {
+        const bsp_light *light = bsp_scene_light(s, l);
+        bsp_vec3 L = v3_sub(light->pos, p);
+        if (v3_dot(ng, L) <= 0.0)
+            continue; /* light behind the visible side: no shadow ray (SPD rule) */
+        if (shadowed(w, p, light->pos))
+            continue;
+        L = v3_normalize(L);
+        double diff = v3_dot(ns, L);
+        if (diff < 0.0)
+            diff = 0.0;
+        double spec = 0.0;
+        if (m->ks > 0.0) {
+            bsp_vec3 h = v3_sub(v3_scale(ns, 2.0 * v3_dot(ns, L)), L); /* mirror of L */
+            double rv = v3_dot(h, view);
+            if (rv > 0.0)
+                spec = m->ks * pow(rv, m->shine);
+        }
+        for (int c = 0; c < 3; c++)
+            out[c] += I * light->color[c] * (m->kd * m->color[c] * diff + spec);
+    }
+
+    if (depth >= job->opts->max_depth)
+        return;
+    double cosi = -v3_dot(d, ns);
+    if (m->ks > 0.0) {
+        bsp_ray r;
+        r.org = p;
+        r.dir = v3_normalize(v3_madd(d, ns, 2.0 * cosi));
+        r.tmin = job->eps;
+        r.tmax = INFINITY;
+        double c[3];
+        w->stats.reflected_rays++;
+        trace(w, &r, depth + 1, BSP_RAY_SECONDARY, c);
+        for (int k = 0; k < 3; k++)
+            out[k] += m->ks * c[k];
+    }
+    if (m->t > 0.0) {
+        double eta = entering ? 1.0 / m->ior : m->ior;
+        double k = 1.0 - eta * eta * (1.0 - cosi * cosi);
+        if (k >= 0.0) {
+            bsp_ray r;
+            r.org = p;
+            r.dir = v3_normalize(v3_add(v3_scale(d, eta), v3_scale(ns, eta * cosi - sqrt(k))));
+            r.tmin = job->eps;
+            r.tmax = INFINITY;
+            double c[3];
+            w->stats.refracted_rays++;
+            trace(w, &r, depth + 1, BSP_RAY_SECONDARY, c);
+            for (int q = 0; q < 3; q++)
+                out[q] += m->t * c[q];
+        }
+    }
+}
+
+static void trace(worker *w, const bsp_ray *ray, int depth, bsp_ray_class cls, double out[3])
+{
+    bsp_hit hit;
+    bsp_query_counters before = w->query->counters;
+    int found = bsp_intersect(w->job->accel, w->query, ray, &hit);
+    account(w, cls, &before);
+    w->stats.cls[cls].rays++;
+    if (!found) {
+        bsp_scene_background(w->job->scene, out);
+        return;
+    }
+    w->stats.cls[cls].hits++;
+    shade(w, ray, &hit, depth, out);
+}
+
+static void render_rows(worker *w)
+{
+    render_job *job = w->job;
+    int width = job->img->width, height = job->img->height;
+    for (;;) {
+        int y = atomic_fetch_add(&job->next_row, 1);
+        if (y >= height)
+            break;
+        float *row = job->img->rgb + (size_t)y * (size_t)width * 3;
+        for (int x = 0; x < width; x++) {
+            bsp_ray r = camera_ray(&job->cam, x, y);
+            double c[3];
+            trace(w, &r, 1, BSP_RAY_PRIMARY, c);
+            for (int k = 0; k < 3; k++)
+                row[3 * x + k] = (float)c[k];
+        }
+        int done = atomic_fetch_add(&job->rows_done, 1) + 1;
+        if (w->is_main && job->opts->progress)
+            job->opts->progress((double)done / (double)height, job->opts->progress_ctx);
+    }
+}
+
+static void *worker_main(void *arg)
+{
+    render_rows(arg);
+    return NULL;
+}
+
+static double scene_scale(const bsp_scene *s)
+{
+    bsp_box b = bsp_scene_bounds(s);
+    double scale = 1.0;
+    if (!box_is_empty(b)) {
+        for (int k = 0; k < 3; k++) {
+            scale = fmax(scale, fabs(b.lo.v[k]));
+            scale = fmax(scale, fabs(b.hi.v[k]));
+        }
+    }
+    return scale;
+}
+
+static void add_stats(bsp_render_stats *to, const bsp_render_stats *from)
+{
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
+        bsp_ray_class_stats *a = &to->cls[c];
+        const bsp_ray_class_stats *b = &from->cls[c];
+        a->rays += b->rays;
+        a->hits += b->hits;
+        a->isect_tests += b->isect_tests;
+        a->traversal_steps += b->traversal_steps;
+        a->leaves_visited += b->leaves_visited;
+        a->empty_leaves += b->empty_leaves;
+        a->mailbox_hits += b->mailbox_hits;
+    }
+    to->reflected_rays += from->reflected_rays;
+    to->refracted_rays += from->refracted_rays;
+}
+
+#define RENDER_MAX_THREADS 256
+
+bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts_in,
+                      bsp_image **out, bsp_render_stats *stats, bsp_error *err)
+{
+    *out = NULL;
+    bsp_render_options opts;
+    if (opts_in)
+        opts = *opts_in;
+    else
+        bsp_render_options_defaults(&opts);
+    const bsp_scene *s = bsp_accel_scene(accel);
+    const bsp_camera *cam = bsp_scene_camera(s);
+    if (!cam)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                         "the scene has no camera (no 'v' block)");
+    if (opts.max_depth < 1 || opts.max_depth > 64)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "ray depth %d is outside 1..64",
+                         opts.max_depth);
+    if (opts.width < 0 || opts.height < 0)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "negative image size");
+    int width = opts.width, height = opts.height;
+    if (width == 0 || height == 0)
+        camera_default_size(cam, opts.sampling, &width, &height);
+    int threads = opts.threads;
+    if (threads <= 0) {
+        long n = sysconf(_SC_NPROCESSORS_ONLN);
+        threads = n > 0 ? (int)n : 1;
+    }
+    if (threads > RENDER_MAX_THREADS)
+        threads = RENDER_MAX_THREADS;
+
+    render_job job;
+    memset(&job, 0, sizeof job);
+    job.accel = accel;
+    job.scene = s;
+    job.opts = &opts;
+    job.img = bsp_image_create(width, height);
+    if (!job.img)
+        return error_set(err, BSP_ERR_LIMIT, NULL, 0,
+                         "cannot allocate a %d x %d image", width, height);
+    camera_rays_init(&job.cam, cam, width, height, opts.sampling);
+    job.eps = RAY_EPS_REL * scene_scale(s);
+    size_t nl = bsp_scene_light_count(s);
+    job.light_intensity = nl ? 1.0 / (2.0 * sqrt((double)nl)) : 0.5;
+    atomic_init(&job.next_row, 0);
+    atomic_init(&job.rows_done, 0);
+
+    worker *workers = calloc((size_t)threads, sizeof *workers);
+    pthread_t *tids = calloc((size_t)threads, sizeof *tids);
+    bsp_status st = BSP_OK;
+    if (!workers || !tids)
+        st = error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    for (int i = 0; st == BSP_OK && i < threads; i++) {
+        workers[i].job = &job;
+        workers[i].is_main = i == 0;
+        workers[i].query = bsp_query_create(accel);
+        if (!workers[i].query)
+            st = error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    }
+    double t0 = accel_now();
+    int started = 1;
+    if (st == BSP_OK) {
+        for (; started < threads; started++)
+            if (pthread_create(&tids[started], NULL, worker_main, &workers[started]) != 0)
+                break; /* fewer threads is still a correct render */
+        render_rows(&workers[0]);
+        for (int i = 1; i < started; i++)
+            pthread_join(tids[i], NULL);
+    }
+    double t1 = accel_now();
+
+    if (st == BSP_OK && stats) {
+        memset(stats, 0, sizeof *stats);
+        for (int i = 0; i < started; i++)
+            add_stats(stats, &workers[i].stats);
+        stats->width = width;
+        stats->height = height;
+        stats->max_depth = opts.max_depth;
+        stats->threads = started;
+        stats->build_seconds = bsp_accel_build_seconds(accel);
+        stats->render_seconds = t1 - t0;
+    }
+    if (workers)
+        for (int i = 0; i < threads; i++)
+            bsp_query_destroy(workers[i].query);
+    free(workers);
+    free(tids);
+    if (st != BSP_OK) {
+        bsp_image_destroy(job.img);
+        return st;
+    }
+    *out = job.img;
+    return BSP_OK;
+}

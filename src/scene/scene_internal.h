@@ -1,0 +1,153 @@
+/*
+ * scene_internal.h — the storage behind the opaque bsp_scene.
+ *
+ * Layout: one small record per primitive index (kind, shape, slot, material)
+ * and one packed array per shape, so that an intersection loop touches only
+ * the data of the shape it tests. Polygons and patches with three vertices
+ * are stored as triangles (their own fast test); larger ones keep their
+ * vertices in a shared pool and are tested by an exact even-odd crossing test,
+ * so concave polygons (SPD gears) are correct.
+ *
+ * Invariant: once a loader returns, the scene is never written again.
+ */
+#ifndef BSPRAY_SCENE_INTERNAL_H
+#define BSPRAY_SCENE_INTERNAL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "bspray/error.h"
+#include "bspray/geom.h"
+#include "bspray/scene.h"
+#include "geom/shapes.h"
+
+#define HIDDEN __attribute__((visibility("hidden")))
+
+/* How a primitive is stored and intersected (not the same as its NFF kind:
+ * a p or pp with three vertices is a triangle). */
+typedef enum shape_kind {
+    SHAPE_SPHERE = 0,
+    SHAPE_TRIANGLE,
+    SHAPE_POLYGON,
+    SHAPE_CONE,
+    SHAPE_NONE /* dropped primitive */
+} shape_kind;
+
+/* Refusal limits, checked before anything is allocated. */
+#define SCENE_MAX_PRIMS ((size_t)1 << 28)      /* 268 million primitives */
+#define SCENE_MAX_POLY_VERTS ((size_t)1 << 20) /* vertices of one polygon */
+#define SCENE_MAX_TOTAL_VERTS ((size_t)1 << 30)
+#define SCENE_MAX_LIGHTS ((size_t)1 << 16)
+#define SCENE_MAX_MATERIALS ((size_t)1 << 26)
+#define SCENE_MAX_WARNINGS 64
+
+typedef struct prim_record {
+    uint8_t kind;      /* bsp_prim_kind */
+    uint8_t shape;     /* shape_kind */
+    uint32_t slot;     /* index into the array of its shape */
+    uint32_t material; /* index into materials */
+} prim_record;
+
+struct bsp_scene {
+    /* per primitive, in input order */
+    prim_record *prims;
+    size_t nprims, cap_prims;
+
+    /* per shape */
+    sphere_shape *spheres;
+    size_t nspheres, cap_spheres;
+    triangle_shape *triangles;
+    size_t ntriangles, cap_triangles;
+    polygon_shape *polygons;
+    size_t npolygons, cap_polygons;
+    cone_shape *cones;
+    size_t ncones, cap_cones;
+
+    /* vertex pool of polygons with more than three vertices, and the vertex
+     * normals of patches (triangles and polygons), indexed by the shapes */
+    bsp_vec3 *verts;
+    size_t nverts, cap_verts;
+    bsp_vec3 *normals;
+    size_t nnormals, cap_normals;
+
+    size_t kind_count[BSP_PRIM_KIND_COUNT];
+
+    bsp_material *materials;
+    size_t nmaterials, cap_materials;
+    size_t current_material;
+    int material_explicit; /* set_material was called at least once */
+
+    bsp_light *lights;
+    size_t nlights, cap_lights;
+
+    bsp_camera camera;
+    int has_camera;
+    double background[3];
+
+    bsp_box bounds; /* of the live primitives */
+
+    char *warnings[SCENE_MAX_WARNINGS];
+    size_t nwarnings;
+    /* degenerate input per original kind: how many, and where first met */
+    size_t dropped_by_kind[BSP_PRIM_KIND_COUNT];
+    size_t dropped_first_line[BSP_PRIM_KIND_COUNT];
+    int finished; /* scene_finish has run */
+
+    /* the location loaders report in messages: file name and current line
+     * (line 0: no location) */
+    const char *src_name;
+    size_t src_line;
+};
+
+/* Formats "NAME:LINE: message" (or just the message without a location)
+ * into ERR and returns STATUS. */
+HIDDEN bsp_status scene_fail(const bsp_scene *s, bsp_error *err, bsp_status status,
+                             const char *fmt, ...) __attribute__((format(printf, 4, 5)));
+
+/* Same, with an explicit location (NAME may be NULL). */
+HIDDEN bsp_status error_set(bsp_error *err, bsp_status status, const char *name,
+                            size_t line, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+
+/* Adds a warning string (copied) unless the list is full. */
+HIDDEN void scene_warn(bsp_scene *s, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+/* Emits the one-warning-per-kind summary of dropped primitives; loaders call
+ * it once at the end. Idempotent. */
+HIDDEN void scene_finish(bsp_scene *s);
+
+/* Sets where the next primitives come from, for messages (NAME borrowed). */
+HIDDEN void scene_set_source(bsp_scene *s, const char *name, size_t line);
+
+/* Intersection dispatch used by every accelerator (inline for speed): the t
+ * computed never depends on ray->tmin / ray->tmax, which only filter. */
+static inline int scene_intersect(const bsp_scene *s, uint32_t prim, const bsp_ray *ray,
+                                  bsp_hit *hit)
+{
+    const prim_record *p = &s->prims[prim];
+    int ok = 0;
+    hit->u = 0.0;
+    hit->v = 0.0;
+    switch ((shape_kind)p->shape) {
+    case SHAPE_SPHERE:
+        ok = sphere_intersect(&s->spheres[p->slot], ray, &hit->t);
+        break;
+    case SHAPE_TRIANGLE:
+        ok = triangle_intersect(&s->triangles[p->slot], ray, &hit->t, &hit->u, &hit->v);
+        break;
+    case SHAPE_POLYGON:
+        ok = polygon_intersect(&s->polygons[p->slot], s->verts, ray, &hit->t);
+        break;
+    case SHAPE_CONE:
+        ok = cone_intersect(&s->cones[p->slot], ray, &hit->t);
+        break;
+    case SHAPE_NONE:
+        break;
+    }
+    if (ok)
+        hit->prim = prim;
+    return ok;
+}
+
+#endif /* BSPRAY_SCENE_INTERNAL_H */

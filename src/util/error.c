@@ -1,0 +1,64 @@
+/*
+ * error.c — status names and the formatting of bsp_error records
+ * ("NAME:LINE: message").
+ */
+#include <stdarg.h>
+#include <stdio.h>
+
+#include "scene/scene_internal.h"
+
+const char *bsp_status_name(bsp_status status)
+{
+    switch (status) {
+    case BSP_OK:
+        return "ok";
+    case BSP_ERR_IO:
+        return "io";
+    case BSP_ERR_PARSE:
+        return "parse";
+    case BSP_ERR_INVALID:
+        return "invalid";
+    case BSP_ERR_LIMIT:
+        return "limit";
+    case BSP_ERR_NOMEM:
+        return "out of memory";
+    }
+    return "unknown";
+}
+
+static bsp_status error_vset(bsp_error *err, bsp_status status, const char *name, size_t line,
+                             const char *fmt, va_list ap)
+{
+    if (!err)
+        return status;
+    err->status = status;
+    int n = 0;
+    if (name && line > 0)
+        n = snprintf(err->message, sizeof err->message, "%s:%zu: ", name, line);
+    else if (name)
+        n = snprintf(err->message, sizeof err->message, "%s: ", name);
+    if (n < 0 || (size_t)n >= sizeof err->message)
+        n = 0;
+    vsnprintf(err->message + n, sizeof err->message - (size_t)n, fmt, ap);
+    return status;
+}
+
+bsp_status error_set(bsp_error *err, bsp_status status, const char *name, size_t line,
+                     const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    error_vset(err, status, name, line, fmt, ap);
+    va_end(ap);
+    return status;
+}
+
+bsp_status scene_fail(const bsp_scene *s, bsp_error *err, bsp_status status, const char *fmt,
+                      ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    error_vset(err, status, s ? s->src_name : NULL, s ? s->src_line : 0, fmt, ap);
+    va_end(ap);
+    return status;
+}

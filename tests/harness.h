@@ -1,0 +1,84 @@
+/*
+ * harness.h — a tiny test harness. Each tests/test_*.c file defines tests with
+ * TEST(name) { ... }; they register themselves before main (a constructor), so
+ * adding a file is all it takes. CHECK* macros record a failure and go on;
+ * REQUIRE* macros end the current test. The runner (tests/main.c) prints one
+ * line per failed check and ends with "N passed, N failed[, N skipped]".
+ */
+#ifndef BSPRAY_TESTS_HARNESS_H
+#define BSPRAY_TESTS_HARNESS_H
+
+#include <math.h>
+#include <setjmp.h>
+#include <stdio.h>
+#include <string.h>
+
+typedef void (*test_fn)(void);
+
+void harness_register(const char *name, const char *file, test_fn fn);
+void harness_fail(const char *file, int line, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+/* Marks the current test skipped (with a reason) and ends it. */
+void harness_skip(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+/* Ends the current test (after a failed REQUIRE). */
+void harness_abort_test(void) __attribute__((noreturn));
+/* Path of ../shared relative to the repository, or NULL when it is absent. */
+const char *harness_shared_dir(void);
+/* Path of the CLI binary under test (BSPRAY_CLI, default build/bspray). */
+const char *harness_cli(void);
+/* A fresh temporary directory for this run (created on first use). */
+const char *harness_tmpdir(void);
+
+#define TEST(name)                                                                          \
+    static void name(void);                                                                 \
+    __attribute__((constructor)) static void register_##name(void)                          \
+    {                                                                                       \
+        harness_register(#name, __FILE__, name);                                            \
+    }                                                                                       \
+    static void name(void)
+
+#define CHECK(cond)                                                                         \
+    do {                                                                                    \
+        if (!(cond))                                                                        \
+            harness_fail(__FILE__, __LINE__, "CHECK(%s)", #cond);                           \
+    } while (0)
+
+#define CHECK_MSG(cond, ...)                                                                \
+    do {                                                                                    \
+        if (!(cond))                                                                        \
+            harness_fail(__FILE__, __LINE__, __VA_ARGS__);                                  \
+    } while (0)
+
+#define REQUIRE(cond)                                                                       \
+    do {                                                                                    \
+        if (!(cond)) {                                                                      \
+            harness_fail(__FILE__, __LINE__, "REQUIRE(%s)", #cond);                         \
+            harness_abort_test();                                                           \
+        }                                                                                   \
+    } while (0)
+
+#define CHECK_EQ_INT(a, b)                                                                  \
+    do {                                                                                    \
+        long long check_a_ = (long long)(a), check_b_ = (long long)(b);                     \
+        if (check_a_ != check_b_)                                                           \
+            harness_fail(__FILE__, __LINE__, "CHECK_EQ_INT(%s, %s): %lld != %lld", #a, #b,  \
+                         check_a_, check_b_);                                               \
+    } while (0)
+
+#define CHECK_NEAR(a, b, tol)                                                               \
+    do {                                                                                    \
+        double check_a_ = (double)(a), check_b_ = (double)(b);                              \
+        if (!(fabs(check_a_ - check_b_) <= (tol)))                                          \
+            harness_fail(__FILE__, __LINE__, "CHECK_NEAR(%s, %s): %.17g vs %.17g", #a, #b,  \
+                         check_a_, check_b_);                                               \
+    } while (0)
+
+#define CHECK_STR_CONTAINS(hay, needle)                                                     \
+    do {                                                                                    \
+        const char *check_h_ = (hay), *check_n_ = (needle);                                 \
+        if (!check_h_ || !strstr(check_h_, check_n_))                                       \
+            harness_fail(__FILE__, __LINE__, "'%s' does not contain '%s'",                  \
+                         check_h_ ? check_h_ : "(null)", check_n_);                         \
+    } while (0)
+
+#endif /* BSPRAY_TESTS_HARNESS_H */

@@ -1,0 +1,223 @@
+/*
+ * test_render.c — the Whitted renderer: camera geometry of both sampling
+ * conventions, shadows, determinism across thread counts, and ray statistics
+ * on scenes whose counts can be worked out by hand.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bspray/bspray.h"
+#include "geom/vec.h"
+#include "harness.h"
+#include "render/camera.h"
+
+static bsp_camera make_camera(bsp_vec3 from, bsp_vec3 at, bsp_vec3 up, double angle, int res)
+{
+    bsp_camera c;
+    memset(&c, 0, sizeof c);
+    c.from = from;
+    c.at = at;
+    c.up = up;
+    c.angle_deg = angle;
+    c.hither = 1;
+    c.res_x = c.res_y = res;
+    return c;
+}
+
+static double angle_between(bsp_vec3 a, bsp_vec3 b)
+{
+    return acos(v3_dot(v3_normalize(a), v3_normalize(b))) * 180.0 / BSP_PI;
+}
+
+TEST(camera_spd_corner_rays_span_the_angle)
+{
+    bsp_camera c = make_camera(bsp_v3(0, 0, 10), bsp_v3(0, 0, 0), bsp_v3(0, 1, 0), 45, 512);
+    int w, h;
+    camera_default_size(&c, BSP_SAMPLING_SPD, &w, &h);
+    CHECK_EQ_INT(w, 513);
+    CHECK_EQ_INT(h, 513);
+    camera_rays cr;
+    camera_rays_init(&cr, &c, w, h, BSP_SAMPLING_SPD);
+    /* first and last ray of the middle row are 45 degrees apart */
+    bsp_ray left = camera_ray(&cr, 0, 256), right = camera_ray(&cr, 512, 256);
+    CHECK_NEAR(angle_between(left.dir, right.dir), 45.0, 1e-9);
+    /* the centre ray looks at 'at'; row 0 is up (+y), column 0 is left (-x) */
+    bsp_ray mid = camera_ray(&cr, 256, 256);
+    CHECK_NEAR(mid.dir.x, 0, 1e-15);
+    CHECK_NEAR(mid.dir.y, 0, 1e-15);
+    CHECK_NEAR(mid.dir.z, -1, 1e-15);
+    CHECK(camera_ray(&cr, 256, 0).dir.y > 0);
+    CHECK(camera_ray(&cr, 0, 256).dir.x < 0);
+    CHECK_NEAR(camera_ray(&cr, 0, 0).dir.x, -camera_ray(&cr, 512, 512).dir.x, 1e-15);
+}
+
+TEST(camera_pixel_centres_span_the_outer_edges)
+{
+    bsp_camera c = make_camera(bsp_v3(0, 0, 10), bsp_v3(0, 0, 0), bsp_v3(0, 1, 0), 90, 512);
+    int w, h;
+    camera_default_size(&c, BSP_SAMPLING_CENTRES, &w, &h);
+    CHECK_EQ_INT(w, 512);
+    camera_rays cr;
+    camera_rays_init(&cr, &c, 4, 4, BSP_SAMPLING_CENTRES);
+    /* 4 pixels over tan(45) = 1 on each side: centres at -0.75, -0.25, 0.25, 0.75 */
+    bsp_ray r = camera_ray(&cr, 0, 0);
+    CHECK_NEAR(r.dir.x / -r.dir.z, -0.75, 1e-15);
+    CHECK_NEAR(r.dir.y / -r.dir.z, 0.75, 1e-15);
+    r = camera_ray(&cr, 2, 3);
+    CHECK_NEAR(r.dir.x / -r.dir.z, 0.25, 1e-15);
+    CHECK_NEAR(r.dir.y / -r.dir.z, -0.75, 1e-15);
+}
+
+TEST(camera_up_need_not_be_perpendicular)
+{
+    /* lattice-like: up (0.2, 1, 0) is not perpendicular to the view */
+    bsp_camera c = make_camera(bsp_v3(0, 1, 1), bsp_v3(0, -1, -1), bsp_v3(0.2, 1, 0), 60, 8);
+    camera_rays cr;
+    camera_rays_init(&cr, &c, 9, 9, BSP_SAMPLING_SPD);
+    CHECK_NEAR(v3_dot(cr.forward, cr.right), 0, 1e-15);
+    CHECK_NEAR(v3_dot(cr.forward, cr.up), 0, 1e-15);
+    CHECK_NEAR(v3_dot(cr.right, cr.up), 0, 1e-15);
+    CHECK_NEAR(v3_length(cr.up), 1, 1e-15);
+    CHECK(v3_dot(cr.up, c.up) > 0);
+}
+
+/* A floor square at z = 0, a sphere above it, one light overhead, the camera
+ * looking down. */
+static bsp_scene *shadow_scene(double floor_ks)
+{
+    bsp_scene *s = bsp_scene_create();
+    REQUIRE(s);
+    bsp_error err;
+    bsp_camera c = make_camera(bsp_v3(0, 0, 10), bsp_v3(0, 0, 0), bsp_v3(0, 1, 0), 60, 32);
+    REQUIRE(bsp_scene_set_camera(s, &c, &err) == BSP_OK);
+    bsp_light l = {bsp_v3(0, 0, 8), {1, 1, 1}, 0};
+    REQUIRE(bsp_scene_add_light(s, &l, &err) == BSP_OK);
+    bsp_material m = {{1, 1, 1}, 0.8, floor_ks, 10, 0, 1};
+    REQUIRE(bsp_scene_set_material(s, &m, &err) == BSP_OK);
+    bsp_vec3 q[4] = {bsp_v3(-50, -50, 0), bsp_v3(50, -50, 0), bsp_v3(50, 50, 0),
+                     bsp_v3(-50, 50, 0)};
+    REQUIRE(bsp_scene_add_polygon(s, q, 4, &err) == BSP_OK);
+    bsp_material m2 = {{1, 0, 0}, 0.8, 0, 10, 0, 1};
+    REQUIRE(bsp_scene_set_material(s, &m2, &err) == BSP_OK);
+    REQUIRE(bsp_scene_add_sphere(s, bsp_v3(2.5, 0, 4), 1.0, &err) == BSP_OK);
+    return s;
+}
+
+static bsp_image *render(const bsp_scene *s, int threads, int depth, bsp_render_stats *st)
+{
+    bsp_accel *a = NULL;
+    bsp_error err;
+    REQUIRE(bsp_accel_build(s, NULL, &a, &err) == BSP_OK);
+    bsp_render_options o;
+    bsp_render_options_defaults(&o);
+    o.threads = threads;
+    o.max_depth = depth;
+    bsp_image *img = NULL;
+    REQUIRE(bsp_render(a, &o, &img, st, &err) == BSP_OK);
+    bsp_accel_destroy(a);
+    return img;
+}
+
+static double luminance(const bsp_image *img, int x, int y)
+{
+    const float *p = img->rgb + 3 * ((size_t)y * (size_t)img->width + (size_t)x);
+    return p[0] + p[1] + p[2];
+}
+
+TEST(render_shadowed_pixel_is_darker_than_lit_neighbour)
+{
+    bsp_scene *s = shadow_scene(0);
+    bsp_render_stats st;
+    bsp_image *img = render(s, 1, 4, &st);
+    CHECK_EQ_INT(img->width, 33);
+    /* The sphere at x = 2.5, z = 4 under a light at z = 8 shadows the floor
+     * around x = 2.5 * 8 / 4 = 5. With the view half-width tan(30) * 10 =
+     * 5.77 over 16 ray steps, x = 5 is column 16 + 5 / (5.77/16) = 29.9. */
+    double step = tan(30.0 * BSP_PI / 180.0) * 10.0 / 16.0;
+    int shadow_col = 16 + (int)lround(5.0 / step);
+    int lit_col = 16 - (int)lround(5.0 / step); /* mirror image: lit floor */
+    double dark = luminance(img, shadow_col, 16), lit = luminance(img, lit_col, 16);
+    CHECK_MSG(dark < 0.5 * lit, "shadow %g vs lit %g", dark, lit);
+    /* the ray counts: every primary ray hits (floor or sphere), each hit
+     * casts one shadow ray (the light is on the visible side everywhere) */
+    CHECK_EQ_INT(st.cls[BSP_RAY_PRIMARY].rays, 33 * 33);
+    CHECK_EQ_INT(st.cls[BSP_RAY_PRIMARY].hits, 33 * 33);
+    CHECK_EQ_INT(st.cls[BSP_RAY_SHADOW].rays, 33 * 33);
+    CHECK(st.cls[BSP_RAY_SHADOW].hits > 0);
+    CHECK_EQ_INT(st.cls[BSP_RAY_SECONDARY].rays, 0);
+    bsp_image_destroy(img);
+    bsp_scene_destroy(s);
+}
+
+TEST(render_reflection_counts_by_hand)
+{
+    /* Floor with Ks > 0: every floor hit spawns one reflected ray; reflected
+     * rays go up and hit the sphere or nothing; the sphere has Ks = 0. */
+    bsp_scene *s = shadow_scene(0.5);
+    bsp_render_stats st1, st2;
+    bsp_image *d1 = render(s, 1, 1, &st1);
+    CHECK_EQ_INT(st1.cls[BSP_RAY_SECONDARY].rays, 0); /* depth 1: primary rays only */
+    bsp_image *d2 = render(s, 1, 2, &st2);
+    uint64_t sphere_pixels = 0;
+    /* primary hits on the sphere are the rays whose reflected count is 0 */
+    CHECK_EQ_INT(st2.cls[BSP_RAY_PRIMARY].hits, 33 * 33);
+    sphere_pixels = 33 * 33 - st2.reflected_rays;
+    CHECK(sphere_pixels > 0 && sphere_pixels < 200);
+    CHECK_EQ_INT(st2.cls[BSP_RAY_SECONDARY].rays, st2.reflected_rays);
+    CHECK_EQ_INT(st2.refracted_rays, 0);
+    /* reflected rays go up from the floor and hit the sphere's underside,
+     * which faces away from the overhead light: the SPD rule casts no shadow
+     * ray there, so depth 2 adds secondary hits but no shadow rays */
+    CHECK(st2.cls[BSP_RAY_SECONDARY].hits > 0);
+    CHECK_EQ_INT(st2.cls[BSP_RAY_SHADOW].rays, st1.cls[BSP_RAY_SHADOW].rays);
+    bsp_image_destroy(d1);
+    bsp_image_destroy(d2);
+    bsp_scene_destroy(s);
+}
+
+TEST(render_identical_with_one_and_two_threads)
+{
+    bsp_scene *s = shadow_scene(0.5);
+    bsp_render_stats a, b;
+    bsp_image *i1 = render(s, 1, 4, &a), *i2 = render(s, 2, 4, &b);
+    REQUIRE(i1->width == i2->width && i1->height == i2->height);
+    CHECK(memcmp(i1->rgb, i2->rgb, sizeof(float) * 3 * (size_t)i1->width * (size_t)i1->height) ==
+          0);
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
+        CHECK_EQ_INT(a.cls[c].rays, b.cls[c].rays);
+        CHECK_EQ_INT(a.cls[c].hits, b.cls[c].hits);
+        CHECK_EQ_INT(a.cls[c].isect_tests, b.cls[c].isect_tests);
+    }
+    CHECK_EQ_INT(b.threads, 2);
+    bsp_image_destroy(i1);
+    bsp_image_destroy(i2);
+    bsp_scene_destroy(s);
+}
+
+TEST(render_refraction_through_glass_sphere)
+{
+    /* A glass sphere (T > 0) in front of the camera, nothing else: the
+     * central ray enters, leaves through the back and misses; every ray that
+     * hits spawns a refracted ray, and with Ks > 0 a reflected one. */
+    bsp_scene *s = bsp_scene_create();
+    bsp_error err;
+    bsp_camera c = make_camera(bsp_v3(0, 0, 10), bsp_v3(0, 0, 0), bsp_v3(0, 1, 0), 20, 8);
+    REQUIRE(bsp_scene_set_camera(s, &c, &err) == BSP_OK);
+    bsp_material glass = {{1, 1, 1}, 0.1, 0.1, 30, 0.9, 1.5};
+    REQUIRE(bsp_scene_set_material(s, &glass, &err) == BSP_OK);
+    REQUIRE(bsp_scene_add_sphere(s, bsp_v3(0, 0, 0), 1.0, &err) == BSP_OK);
+    bsp_render_stats st;
+    bsp_image *img = render(s, 1, 2, &st);
+    uint64_t hits = st.cls[BSP_RAY_PRIMARY].hits;
+    CHECK(hits > 0 && hits < 81);
+    /* depth 2: each primary hit spawns one reflected and one refracted ray
+     * (no total internal reflection when entering) */
+    CHECK_EQ_INT(st.reflected_rays, hits);
+    CHECK_EQ_INT(st.refracted_rays, hits);
+    /* reflected rays leave the convex sphere and miss; refracted rays hit
+     * its far side from inside */
+    CHECK_EQ_INT(st.cls[BSP_RAY_SECONDARY].hits, hits);
+    bsp_image_destroy(img);
+    bsp_scene_destroy(s);
+}

@@ -1,0 +1,626 @@
+/*
+ * bspray.c — the command-line tool, a client of include/bspray only.
+ *
+ *   bspray render SCENE [options]   Whitted render to PNG/PPM + ray statistics
+ *   bspray trace  SCENE --rays FILE batch closest-hit / occlusion queries
+ *   bspray stats  SCENE             what a scene contains
+ *
+ * Exit status: 0 success, 1 bad input or failure at run time, 2 usage error.
+ * Only this file prints; the library reports through bsp_error.
+ */
+#include <errno.h>
+#include <inttypes.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "bspray/bspray.h"
+#include "util/progress.h"
+
+#define EXIT_INPUT 1
+#define EXIT_USAGE 2
+
+static const char *prog = "bspray";
+
+static void die_usage(const char *usage, const char *fmt, const char *arg)
+{
+    fprintf(stderr, "%s: ", prog);
+    fprintf(stderr, fmt, arg);
+    fprintf(stderr, "\nusage: %s\nTry '%s --help' for more.\n", usage, prog);
+    exit(EXIT_USAGE);
+}
+
+/* --- option parsing helpers ----------------------------------------------- */
+
+typedef struct args {
+    int argc, i;
+    char **argv;
+    const char *usage;
+} args;
+
+/* The value of option OPT (the next argument), or a usage error. */
+static const char *opt_value(args *a, const char *opt)
+{
+    if (a->i + 1 >= a->argc)
+        die_usage(a->usage, "option '%s' needs a value", opt);
+    return a->argv[++a->i];
+}
+
+static int parse_int(args *a, const char *opt, long lo, long hi)
+{
+    const char *v = opt_value(a, opt);
+    char *end;
+    errno = 0;
+    long x = strtol(v, &end, 10);
+    if (errno || end == v || *end || x < lo || x > hi) {
+        char msg[160];
+        snprintf(msg, sizeof msg, "option '%s' needs a whole number from %ld to %ld, got '%%s'",
+                 opt, lo, hi);
+        die_usage(a->usage, msg, v);
+    }
+    return (int)x;
+}
+
+static int parse_on_off(args *a, const char *opt)
+{
+    const char *v = opt_value(a, opt);
+    if (!strcmp(v, "on") || !strcmp(v, "1") || !strcmp(v, "yes"))
+        return 1;
+    if (!strcmp(v, "off") || !strcmp(v, "0") || !strcmp(v, "no"))
+        return 0;
+    die_usage(a->usage, "expected on or off, got '%s'", v);
+    return 0;
+}
+
+static int is_help(const char *s)
+{
+    return !strcmp(s, "-h") || !strcmp(s, "--help");
+}
+
+static bsp_scene *load_scene(const char *path)
+{
+    bsp_scene *scene = NULL;
+    bsp_error err;
+    if (bsp_scene_load(path, &scene, &err) != BSP_OK) {
+        fprintf(stderr, "%s: %s\n", prog, err.message);
+        exit(EXIT_INPUT);
+    }
+    for (size_t i = 0; i < bsp_scene_warning_count(scene); i++)
+        fprintf(stderr, "%s: warning: %s\n", prog, bsp_scene_warning(scene, i));
+    return scene;
+}
+
+static bsp_accel *build_accel(const bsp_scene *scene, const bsp_build_options *opts)
+{
+    bsp_accel *accel = NULL;
+    bsp_error err;
+    if (bsp_accel_build(scene, opts, &accel, &err) != BSP_OK) {
+        fprintf(stderr, "%s: %s\n", prog, err.message);
+        exit(EXIT_INPUT);
+    }
+    return accel;
+}
+
+static void parse_accel(args *a, bsp_build_options *opts)
+{
+    const char *v = opt_value(a, "--accel");
+    bsp_error err;
+    if (bsp_accel_kind_parse(v, &opts->kind, &err) != BSP_OK)
+        die_usage(a->usage, "%s", err.message);
+}
+
+/* --- render ------------------------------------------------------------------ */
+
+static const char render_usage[] =
+    "bspray render SCENE [-o OUT.png|OUT.ppm] [--res N | --size WxH] [--depth N]\n"
+    "                    [--sampling spd|centres] [--accel METHOD] [--mailbox on|off]\n"
+    "                    [--threads N] [--stats-json FILE] [--quiet]";
+
+static const char render_help[] =
+    "Render SCENE with the Whitted ray tracer of the SPD and print its ray statistics.\n"
+    "\n"
+    "SCENE is an NFF file (.nff or .nff.gz) or spd:NAME[:SIZE] for a built-in SPD scene.\n"
+    "\n"
+    "  -o FILE            output image; .ppm writes binary PPM, anything else PNG\n"
+    "                     (default: out.png)\n"
+    "  --res N            N x N rays (see --sampling); default: from the scene's camera\n"
+    "  --size WxH         W x H rays\n"
+    "  --sampling spd     (default) the SPD timing protocol: a file that says\n"
+    "                     'resolution 512 512' is traced with 513 x 513 rays through the\n"
+    "                     pixel corners, and the view angle spans the first to the last ray;\n"
+    "                     --res N then means N x N rays on the same rule, so --res 513 is\n"
+    "                     the protocol of Havran's tables and of 'bspray bench'\n"
+    "  --sampling centres the ordinary convention: N x N pixels, one ray through each pixel\n"
+    "                     centre, the view angle spanning the outer pixel edges\n"
+    "  --depth N          maximum ray depth, primary rays being depth 1 (default 4)\n"
+    "  --accel METHOD     acceleration method: naive (default)\n"
+    "  --mailbox on|off   test each primitive at most once per ray (default on)\n"
+    "  --threads N        worker threads (default: all cores); the image does not depend on it\n"
+    "  --stats-json FILE  also write the statistics as JSON\n"
+    "  --quiet            print no statistics table\n";
+
+typedef struct progress_ctx {
+    progress_bar *bar;
+} progress_ctx;
+
+static void on_progress(double done, void *ctx)
+{
+    progress_update(((progress_ctx *)ctx)->bar, done);
+}
+
+static double safe_div(double a, double b)
+{
+    return b > 0 ? a / b : 0.0;
+}
+
+static void print_stats_table(FILE *f, const char *scene_name, const char *accel_name,
+                              const bsp_render_stats *st, int sampling)
+{
+    const bsp_ray_class_stats *P = &st->cls[BSP_RAY_PRIMARY], *S = &st->cls[BSP_RAY_SHADOW],
+                              *R = &st->cls[BSP_RAY_SECONDARY];
+    uint64_t all = P->rays + S->rays + R->rays;
+    uint64_t req = P->hits + S->hits + R->hits;
+    uint64_t tests = P->isect_tests + S->isect_tests + R->isect_tests;
+    fprintf(f, "| %s | %s |\n|---|---:|\n", "statistic", scene_name);
+    fprintf(f, "| image | %d x %d rays, %s sampling |\n", st->width, st->height,
+            sampling == BSP_SAMPLING_SPD ? "SPD corner" : "pixel-centre");
+    fprintf(f, "| method | %s, depth %d, %d threads |\n", accel_name, st->max_depth, st->threads);
+    fprintf(f, "| PrimaryRay | %" PRIu64 " |\n", P->rays);
+    fprintf(f, "| UsedIntPrimRay | %" PRIu64 " |\n", P->hits);
+    fprintf(f, "| ScnCoverage[%%] | %.2f |\n", 100.0 * safe_div((double)P->hits, (double)P->rays));
+    fprintf(f, "| ShadowRay | %" PRIu64 " |\n", S->rays);
+    fprintf(f, "| UsedIntShadRay | %" PRIu64 " |\n", S->hits);
+    fprintf(f, "| SecondaryRay | %" PRIu64 " |\n", R->rays);
+    fprintf(f, "| (reflected, refracted) | %" PRIu64 ", %" PRIu64 " |\n", st->reflected_rays,
+            st->refracted_rays);
+    fprintf(f, "| UsedIntSecRay | %" PRIu64 " |\n", R->hits);
+    fprintf(f, "| AllRays | %" PRIu64 " |\n", all);
+    fprintf(f, "| IntersRequired | %" PRIu64 " |\n", req);
+    fprintf(f, "| N_IT primary | %.2f |\n", safe_div((double)P->isect_tests, (double)P->rays));
+    fprintf(f, "| N_IT shadow | %.2f |\n", safe_div((double)S->isect_tests, (double)S->rays));
+    fprintf(f, "| N_IT secondary | %.2f |\n", safe_div((double)R->isect_tests, (double)R->rays));
+    fprintf(f, "| N_IT all | %.2f |\n", safe_div((double)tests, (double)all));
+    fprintf(f, "| T_B[s] | %.3f |\n", st->build_seconds);
+    fprintf(f, "| T_TR[s] | %.3f |\n", st->render_seconds);
+    fprintf(f, "| Mrays/s | %.3f |\n", safe_div((double)all, st->render_seconds) * 1e-6);
+}
+
+static void json_class(FILE *f, const char *name, const bsp_ray_class_stats *c, int last)
+{
+    fprintf(f,
+            "    \"%s\": {\"rays\": %" PRIu64 ", \"hits\": %" PRIu64 ", \"isect_tests\": %" PRIu64
+            ", \"traversal_steps\": %" PRIu64 ", \"N_IT\": %.6f}%s\n",
+            name, c->rays, c->hits, c->isect_tests, c->traversal_steps,
+            safe_div((double)c->isect_tests, (double)c->rays), last ? "" : ",");
+}
+
+static int write_stats_json(const char *path, const char *scene_name, const char *accel_name,
+                            const bsp_render_stats *st)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) {
+        fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, path, strerror(errno));
+        return 0;
+    }
+    const bsp_ray_class_stats *P = &st->cls[BSP_RAY_PRIMARY], *S = &st->cls[BSP_RAY_SHADOW],
+                              *R = &st->cls[BSP_RAY_SECONDARY];
+    uint64_t all = P->rays + S->rays + R->rays;
+    uint64_t tests = P->isect_tests + S->isect_tests + R->isect_tests;
+    fprintf(f, "{\n  \"scene\": \"");
+    for (const char *c = scene_name; *c; c++) {
+        if (*c == '"' || *c == '\\')
+            fputc('\\', f);
+        if ((unsigned char)*c >= 0x20)
+            fputc(*c, f);
+    }
+    fprintf(f, "\",\n  \"accel\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n", accel_name,
+            st->width, st->height);
+    fprintf(f, "  \"max_depth\": %d,\n  \"threads\": %d,\n", st->max_depth, st->threads);
+    fprintf(f, "  \"PrimaryRay\": %" PRIu64 ",\n  \"UsedIntPrimRay\": %" PRIu64 ",\n", P->rays,
+            P->hits);
+    fprintf(f, "  \"ScnCoverage\": %.4f,\n", 100.0 * safe_div((double)P->hits, (double)P->rays));
+    fprintf(f, "  \"ShadowRay\": %" PRIu64 ",\n  \"UsedIntShadRay\": %" PRIu64 ",\n", S->rays,
+            S->hits);
+    fprintf(f, "  \"SecondaryRay\": %" PRIu64 ",\n  \"UsedIntSecRay\": %" PRIu64 ",\n", R->rays,
+            R->hits);
+    fprintf(f, "  \"ReflectedRay\": %" PRIu64 ",\n  \"RefractedRay\": %" PRIu64 ",\n",
+            st->reflected_rays, st->refracted_rays);
+    fprintf(f, "  \"AllRays\": %" PRIu64 ",\n  \"IntersRequired\": %" PRIu64 ",\n", all,
+            P->hits + S->hits + R->hits);
+    fprintf(f, "  \"N_IT\": %.6f,\n", safe_div((double)tests, (double)all));
+    fprintf(f, "  \"T_B\": %.6f,\n  \"T_TR\": %.6f,\n", st->build_seconds, st->render_seconds);
+    fprintf(f, "  \"classes\": {\n");
+    json_class(f, "primary", P, 0);
+    json_class(f, "shadow", S, 0);
+    json_class(f, "secondary", R, 1);
+    fprintf(f, "  }\n}\n");
+    if (fclose(f) != 0) {
+        fprintf(stderr, "%s: %s: write failed: %s\n", prog, path, strerror(errno));
+        return 0;
+    }
+    return 1;
+}
+
+static int cmd_render(int argc, char **argv)
+{
+    args a = {argc, 1, argv, render_usage};
+    const char *scene_path = NULL, *out_path = "out.png", *json_path = NULL;
+    int quiet = 0;
+    bsp_build_options bopts;
+    bsp_build_options_defaults(&bopts);
+    bsp_render_options ropts;
+    bsp_render_options_defaults(&ropts);
+    for (; a.i < argc; a.i++) {
+        const char *s = argv[a.i];
+        if (is_help(s)) {
+            printf("usage: %s\n\n%s", render_usage, render_help);
+            return 0;
+        } else if (!strcmp(s, "-o") || !strcmp(s, "--output")) {
+            out_path = opt_value(&a, s);
+        } else if (!strcmp(s, "--res")) {
+            ropts.width = ropts.height = parse_int(&a, s, 1, 65536);
+        } else if (!strcmp(s, "--size")) {
+            const char *v = opt_value(&a, s);
+            int w, h;
+            char extra;
+            if (sscanf(v, "%dx%d%c", &w, &h, &extra) != 2 || w < 1 || h < 1 || w > 65536 ||
+                h > 65536)
+                die_usage(a.usage, "option '--size' needs WxH with sides from 1 to 65536, got '%s'",
+                          v);
+            ropts.width = w;
+            ropts.height = h;
+        } else if (!strcmp(s, "--depth")) {
+            ropts.max_depth = parse_int(&a, s, 1, 64);
+        } else if (!strcmp(s, "--threads")) {
+            ropts.threads = parse_int(&a, s, 1, 256);
+        } else if (!strcmp(s, "--sampling")) {
+            const char *v = opt_value(&a, s);
+            if (!strcmp(v, "spd"))
+                ropts.sampling = BSP_SAMPLING_SPD;
+            else if (!strcmp(v, "centres") || !strcmp(v, "centers"))
+                ropts.sampling = BSP_SAMPLING_CENTRES;
+            else
+                die_usage(a.usage, "option '--sampling' takes spd or centres, got '%s'", v);
+        } else if (!strcmp(s, "--accel")) {
+            parse_accel(&a, &bopts);
+        } else if (!strcmp(s, "--mailbox")) {
+            bopts.mailbox = parse_on_off(&a, s);
+        } else if (!strcmp(s, "--stats-json")) {
+            json_path = opt_value(&a, s);
+        } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
+            quiet = 1;
+        } else if (s[0] == '-' && s[1]) {
+            die_usage(a.usage, "unknown option '%s'", s);
+        } else if (!scene_path) {
+            scene_path = s;
+        } else {
+            die_usage(a.usage, "unexpected argument '%s'", s);
+        }
+    }
+    if (!scene_path)
+        die_usage(a.usage, "%s", "missing SCENE");
+
+    bsp_scene *scene = load_scene(scene_path);
+    if (!bsp_scene_camera(scene)) {
+        fprintf(stderr, "%s: %s: the scene has no camera ('v' block); cannot render\n", prog,
+                scene_path);
+        bsp_scene_destroy(scene);
+        return EXIT_INPUT;
+    }
+    bsp_accel *accel = build_accel(scene, &bopts);
+    progress_ctx pc = {progress_create(stderr, "render")};
+    ropts.progress = on_progress;
+    ropts.progress_ctx = &pc;
+    bsp_image *img = NULL;
+    bsp_render_stats st;
+    bsp_error err;
+    bsp_status rs = bsp_render(accel, &ropts, &img, &st, &err);
+    progress_finish(pc.bar);
+    int rc = 0;
+    if (rs != BSP_OK) {
+        fprintf(stderr, "%s: %s: %s\n", prog, scene_path, err.message);
+        rc = EXIT_INPUT;
+    } else {
+        if (bsp_image_write(img, out_path, &err) != BSP_OK) {
+            fprintf(stderr, "%s: %s\n", prog, err.message);
+            rc = EXIT_INPUT;
+        }
+        const char *an = bsp_accel_kind_name(bopts.kind);
+        if (!quiet)
+            print_stats_table(stdout, scene_path, an, &st, ropts.sampling);
+        if (json_path && !write_stats_json(json_path, scene_path, an, &st))
+            rc = EXIT_INPUT;
+        if (rc == 0 && !quiet)
+            fprintf(stderr, "%s: wrote %s\n", prog, out_path);
+    }
+    bsp_image_destroy(img);
+    bsp_accel_destroy(accel);
+    bsp_scene_destroy(scene);
+    return rc;
+}
+
+/* --- trace ------------------------------------------------------------------------- */
+
+static const char trace_usage[] =
+    "bspray trace SCENE --rays FILE [--any] [--accel METHOD] [--mailbox on|off]";
+
+static const char trace_help[] =
+    "Shoot the rays of FILE ('-' for standard input) into SCENE, one query per line.\n"
+    "\n"
+    "Input: one ray per line, 'ox oy oz dx dy dz [tmin tmax]' (blank lines and lines\n"
+    "starting with '#' are skipped). The direction need not be unit length: t is in\n"
+    "units of the given direction. tmin defaults to 0 and tmax to infinity ('inf').\n"
+    "\n"
+    "Output: one line per ray, 'hit INDEX T' (INDEX the 0-based primitive index in file\n"
+    "order, T printed with %.9g) or 'miss'; with --any, 'occluded' or 'clear' for the\n"
+    "segment [tmin, tmax]. Ties at equal t go to the lowest index.\n"
+    "\n"
+    "  --rays FILE        the rays (required)\n"
+    "  --any              occlusion queries instead of closest hits\n"
+    "  --accel METHOD     acceleration method: naive (default)\n"
+    "  --mailbox on|off   test each primitive at most once per ray (default on)\n";
+
+/* Parses one number of a ray line; accepts inf/-inf only where ALLOW_INF. */
+static int ray_number(char **p, double *out, int allow_inf)
+{
+    char *end;
+    while (**p == ' ' || **p == '\t')
+        (*p)++;
+    if (!**p || **p == '\n' || **p == '\r')
+        return 0;
+    double x = strtod(*p, &end);
+    if (end == *p || (*end && *end != ' ' && *end != '\t' && *end != '\n' && *end != '\r'))
+        return -1;
+    if (isnan(x) || (isinf(x) && !allow_inf))
+        return -1;
+    *out = x;
+    *p = end;
+    return 1;
+}
+
+static int cmd_trace(int argc, char **argv)
+{
+    args a = {argc, 1, argv, trace_usage};
+    const char *scene_path = NULL, *rays_path = NULL;
+    int any = 0;
+    bsp_build_options bopts;
+    bsp_build_options_defaults(&bopts);
+    for (; a.i < argc; a.i++) {
+        const char *s = argv[a.i];
+        if (is_help(s)) {
+            printf("usage: %s\n\n%s", trace_usage, trace_help);
+            return 0;
+        } else if (!strcmp(s, "--rays")) {
+            rays_path = opt_value(&a, s);
+        } else if (!strcmp(s, "--any")) {
+            any = 1;
+        } else if (!strcmp(s, "--accel")) {
+            parse_accel(&a, &bopts);
+        } else if (!strcmp(s, "--mailbox")) {
+            bopts.mailbox = parse_on_off(&a, s);
+        } else if (s[0] == '-' && s[1]) {
+            die_usage(a.usage, "unknown option '%s'", s);
+        } else if (!scene_path) {
+            scene_path = s;
+        } else {
+            die_usage(a.usage, "unexpected argument '%s'", s);
+        }
+    }
+    if (!scene_path)
+        die_usage(a.usage, "%s", "missing SCENE");
+    if (!rays_path)
+        die_usage(a.usage, "%s", "missing --rays FILE");
+    FILE *in = strcmp(rays_path, "-") ? fopen(rays_path, "r") : stdin;
+    if (!in) {
+        fprintf(stderr, "%s: %s: cannot open: %s\n", prog, rays_path, strerror(errno));
+        return EXIT_INPUT;
+    }
+    bsp_scene *scene = load_scene(scene_path);
+    bsp_accel *accel = build_accel(scene, &bopts);
+    bsp_query *q = bsp_query_create(accel);
+    int rc = 0;
+    if (!q) {
+        fprintf(stderr, "%s: out of memory\n", prog);
+        rc = EXIT_INPUT;
+    }
+    char *line = NULL;
+    size_t cap = 0, lineno = 0;
+    ssize_t len;
+    while (rc == 0 && (len = getline(&line, &cap, in)) >= 0) {
+        lineno++;
+        char *p = line;
+        while (*p == ' ' || *p == '\t')
+            p++;
+        if (!*p || *p == '\n' || *p == '\r' || *p == '#')
+            continue;
+        double v[8] = {0, 0, 0, 0, 0, 0, 0, INFINITY};
+        int n = 0, r;
+        while (n < 8 && (r = ray_number(&p, &v[n], n >= 6)) == 1)
+            n++;
+        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n')
+            p++;
+        const char *bad = NULL;
+        if (n < 8 && r < 0)
+            bad = "malformed or non-finite number";
+        else if (*p)
+            bad = "too many fields (expected 'ox oy oz dx dy dz [tmin tmax]')";
+        else if (n != 6 && n != 8)
+            bad = "expected 6 or 8 numbers: 'ox oy oz dx dy dz [tmin tmax]'";
+        else if (v[3] == 0 && v[4] == 0 && v[5] == 0)
+            bad = "the direction is the zero vector";
+        else if (isinf(v[6]) && v[6] > 0)
+            bad = "tmin is +inf";
+        else if (v[7] < v[6])
+            bad = "tmax is smaller than tmin";
+        if (bad) {
+            fprintf(stderr, "%s: %s:%zu: %s\n", prog, rays_path, lineno, bad);
+            rc = EXIT_INPUT;
+            break;
+        }
+        bsp_ray ray = {bsp_v3(v[0], v[1], v[2]), bsp_v3(v[3], v[4], v[5]), v[6], v[7]};
+        if (any) {
+            puts(bsp_occluded(accel, q, &ray) ? "occluded" : "clear");
+        } else {
+            bsp_hit hit;
+            if (bsp_intersect(accel, q, &ray, &hit))
+                printf("hit %" PRIu32 " %.9g\n", hit.prim, hit.t);
+            else
+                puts("miss");
+        }
+    }
+    free(line);
+    if (in != stdin)
+        fclose(in);
+    if (fflush(stdout) != 0) {
+        fprintf(stderr, "%s: write failed: %s\n", prog, strerror(errno));
+        rc = EXIT_INPUT;
+    }
+    bsp_query_destroy(q);
+    bsp_accel_destroy(accel);
+    bsp_scene_destroy(scene);
+    return rc;
+}
+
+/* --- stats --------------------------------------------------------------------------- */
+
+static const char stats_usage[] = "bspray stats SCENE";
+static const char stats_help[] =
+    "Print what SCENE contains: primitives by kind (with polygon vertex counts), bounds,\n"
+    "camera, lights, materials, background, and load warnings.\n";
+
+static int cmd_stats(int argc, char **argv)
+{
+    args a = {argc, 1, argv, stats_usage};
+    const char *scene_path = NULL;
+    for (; a.i < argc; a.i++) {
+        const char *s = argv[a.i];
+        if (is_help(s)) {
+            printf("usage: %s\n\n%s", stats_usage, stats_help);
+            return 0;
+        } else if (s[0] == '-' && s[1]) {
+            die_usage(a.usage, "unknown option '%s'", s);
+        } else if (!scene_path) {
+            scene_path = s;
+        } else {
+            die_usage(a.usage, "unexpected argument '%s'", s);
+        }
+    }
+    if (!scene_path)
+        die_usage(a.usage, "%s", "missing SCENE");
+    bsp_scene *scene = load_scene(scene_path);
+    size_t n = bsp_scene_prim_count(scene);
+    printf("scene: %s\n", scene_path);
+    printf("primitives: %zu\n", n);
+    for (int k = 0; k < BSP_PRIM_KIND_COUNT; k++) {
+        size_t c = bsp_scene_kind_count(scene, (bsp_prim_kind)k);
+        if (!c && k == BSP_PRIM_DROPPED)
+            continue;
+        printf("  %-8s %zu", bsp_prim_kind_name((bsp_prim_kind)k), c);
+        if ((k == BSP_PRIM_POLYGON || k == BSP_PRIM_PATCH) && c) {
+            /* histogram of vertex counts, smallest first */
+            size_t done = 0, last = 0;
+            printf(" (");
+            while (done < c) {
+                size_t best = SIZE_MAX, cnt = 0;
+                for (size_t i = 0; i < n; i++) {
+                    if (bsp_scene_prim_kind(scene, i) != (bsp_prim_kind)k)
+                        continue;
+                    size_t vc = bsp_scene_prim_vertex_count(scene, i);
+                    if (vc > last && vc < best)
+                        best = vc, cnt = 0;
+                    if (vc == best)
+                        cnt++;
+                }
+                if (best == SIZE_MAX)
+                    break;
+                printf("%s%zu x %zu vertices", done ? ", " : "", cnt, best);
+                done += cnt;
+                last = best;
+            }
+            printf(")");
+        }
+        printf("\n");
+    }
+    bsp_box b = bsp_scene_bounds(scene);
+    if (b.lo.x <= b.hi.x)
+        printf("bounds: min (%g, %g, %g) max (%g, %g, %g)\n", b.lo.x, b.lo.y, b.lo.z, b.hi.x,
+               b.hi.y, b.hi.z);
+    else
+        printf("bounds: empty\n");
+    const bsp_camera *c = bsp_scene_camera(scene);
+    if (c) {
+        printf("camera: from (%g, %g, %g) at (%g, %g, %g) up (%g, %g, %g)\n", c->from.x,
+               c->from.y, c->from.z, c->at.x, c->at.y, c->at.z, c->up.x, c->up.y, c->up.z);
+        printf("        angle %g, hither %g, resolution %d x %d\n", c->angle_deg, c->hither,
+               c->res_x, c->res_y);
+    } else {
+        printf("camera: none\n");
+    }
+    printf("lights: %zu\n", bsp_scene_light_count(scene));
+    for (size_t i = 0; i < bsp_scene_light_count(scene); i++) {
+        const bsp_light *l = bsp_scene_light(scene, i);
+        printf("  (%g, %g, %g)", l->pos.x, l->pos.y, l->pos.z);
+        if (l->has_color)
+            printf(" colour %g %g %g", l->color[0], l->color[1], l->color[2]);
+        printf("\n");
+    }
+    size_t nm = bsp_scene_material_count(scene), refl = 0, transm = 0;
+    for (size_t i = 0; i < nm; i++) {
+        const bsp_material *m = bsp_scene_material(scene, i);
+        refl += m->ks > 0;
+        transm += m->t > 0;
+    }
+    printf("materials: %zu (%zu with Ks > 0, %zu with T > 0)\n", nm, refl, transm);
+    double bg[3];
+    bsp_scene_background(scene, bg);
+    printf("background: %g %g %g\n", bg[0], bg[1], bg[2]);
+    bsp_scene_destroy(scene);
+    return 0;
+}
+
+/* --- main ----------------------------------------------------------------------------------- */
+
+static void print_main_help(FILE *f)
+{
+    fprintf(f,
+            "bspray %s — exact ray shooting with adaptive BSP trees\n"
+            "\n"
+            "usage: bspray COMMAND [options]   (bspray COMMAND --help for each)\n"
+            "\n"
+            "commands:\n"
+            "  render   Whitted ray tracing of a scene to PNG/PPM, with ray statistics\n"
+            "  trace    batch ray queries (closest hit or occlusion) from a ray file\n"
+            "  stats    what a scene contains\n"
+            "\n"
+            "SCENE is an NFF file (.nff, .nff.gz) or spd:NAME[:SIZE], a built-in SPD scene.\n",
+            BSPRAY_VERSION_STRING);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        print_main_help(stderr);
+        return EXIT_USAGE;
+    }
+    const char *cmd = argv[1];
+    if (is_help(cmd) || !strcmp(cmd, "help")) {
+        print_main_help(stdout);
+        return 0;
+    }
+    if (!strcmp(cmd, "--version")) {
+        printf("bspray %s\n", BSPRAY_VERSION_STRING);
+        return 0;
+    }
+    if (!strcmp(cmd, "render"))
+        return cmd_render(argc - 1, argv + 1);
+    if (!strcmp(cmd, "trace"))
+        return cmd_trace(argc - 1, argv + 1);
+    if (!strcmp(cmd, "stats"))
+        return cmd_stats(argc - 1, argv + 1);
+    fprintf(stderr, "%s: unknown command '%s'\n", prog, cmd);
+    print_main_help(stderr);
+    return EXIT_USAGE;
+}
