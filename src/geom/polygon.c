@@ -1,0 +1,157 @@
+/*
+ * polygon.c — planar polygons of four or more vertices, convex or concave:
+ * setup, exact bounds, ray intersection and the shading normal of patches.
+ *
+ * The plane is (normal, d) with the Newell normal and the mean offset of the
+ * vertices. A hit is the plane crossing of the ray followed by an even-odd
+ * crossing test of the hit point in the projection that drops the normal's
+ * dominant axis (no triangulation, so concave polygons are exact). The
+ * crossing rule is half-open: an edge counts when exactly one endpoint lies
+ * strictly above the point, and the point must be strictly left of the
+ * crossing. Each edge's crossing abscissa is computed from its lower endpoint,
+ * so an edge shared by two polygons gives both the same abscissa and a point
+ * on it belongs to exactly one of them. Rays parallel to the plane miss.
+ * t never depends on ray->tmin/tmax.
+ */
+#include <math.h>
+
+#include "geom/shapes.h"
+#include "geom/vec.h"
+
+int polygon_setup(polygon_shape *p, const bsp_vec3 *verts, uint32_t first, uint32_t count,
+                  uint32_t normals)
+{
+    if (count < 3)
+        return 0;
+    const bsp_vec3 *vs = verts + first;
+    bsp_vec3 o = vs[0], n = bsp_v3(0.0, 0.0, 0.0);
+    for (uint32_t i = 0; i < count; i++) {
+        bsp_vec3 a = v3_sub(vs[i], o);
+        bsp_vec3 b = v3_sub(vs[i + 1 < count ? i + 1 : 0], o);
+        n.x += (a.y - b.y) * (a.z + b.z);
+        n.y += (a.z - b.z) * (a.x + b.x);
+        n.z += (a.x - b.x) * (a.y + b.y);
+    }
+    double len = v3_length(n);
+    if (!(len > 0.0) || !isfinite(len))
+        return 0;
+    n = bsp_v3(n.x / len, n.y / len, n.z / len);
+    if (!v3_is_finite(n))
+        return 0;
+
+    double sum = 0.0;
+    for (uint32_t i = 0; i < count; i++)
+        sum += v3_dot(n, vs[i]);
+
+    double ax = fabs(n.x), ay = fabs(n.y), az = fabs(n.z);
+    int drop = ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2);
+    p->normal = n;
+    p->d = sum / (double)count;
+    p->first = first;
+    p->count = count;
+    p->normals = normals;
+    p->axis_u = (uint8_t)((drop + 1) % 3);
+    p->axis_v = (uint8_t)((drop + 2) % 3);
+    return 1;
+}
+
+bsp_box polygon_bounds(const polygon_shape *p, const bsp_vec3 *verts)
+{
+    bsp_box box = box_empty();
+    for (uint32_t i = 0; i < p->count; i++)
+        box = box_add_point(box, verts[p->first + i]);
+    return box;
+}
+
+/* Even-odd test of (px, py) against the polygon projected on axes (au, av). */
+static int contains_2d(const bsp_vec3 *vs, uint32_t count, int au, int av, double px, double py)
+{
+    int inside = 0;
+    bsp_vec3 prev = vs[count - 1];
+    for (uint32_t i = 0; i < count; i++) {
+        bsp_vec3 cur = vs[i];
+        if ((cur.v[av] > py) != (prev.v[av] > py)) {
+            const bsp_vec3 *lo = cur.v[av] < prev.v[av] ? &cur : &prev;
+            const bsp_vec3 *hi = lo == &cur ? &prev : &cur;
+            double x = lo->v[au] + (py - lo->v[av]) * (hi->v[au] - lo->v[au]) /
+                                       (hi->v[av] - lo->v[av]);
+            if (px < x)
+                inside ^= 1;
+        }
+        prev = cur;
+    }
+    return inside;
+}
+
+int polygon_intersect(const polygon_shape *p, const bsp_vec3 *verts, const bsp_ray *ray, double *t)
+{
+    double denom = v3_dot(p->normal, ray->dir);
+    if (denom == 0.0)
+        return 0;
+    double tt = (p->d - v3_dot(p->normal, ray->org)) / denom;
+    if (!(tt >= ray->tmin && tt <= ray->tmax))
+        return 0;
+    bsp_vec3 hit = ray_at(ray, tt);
+    if (!contains_2d(verts + p->first, p->count, p->axis_u, p->axis_v, hit.v[p->axis_u],
+                     hit.v[p->axis_v]))
+        return 0;
+    *t = tt;
+    return 1;
+}
+
+/* The normalised pool normal, or FALLBACK when it has no direction. */
+static bsp_vec3 unit_or(bsp_vec3 n, bsp_vec3 fallback)
+{
+    bsp_vec3 u = v3_normalize(n);
+    return v3_is_finite(u) && v3_dot(u, u) > 0.0 ? u : fallback;
+}
+
+/*
+ * Mean value coordinates (Floater; Hormann & Floater's signed-angle form for
+ * arbitrary polygons): w_i = (tan(a_{i-1}/2) + tan(a_i/2)) / r_i, where r_i is
+ * the distance to vertex i and a_i the signed angle subtended by edge
+ * (i, i+1), tan(a/2) = det / (r_i r_{i+1} + dot). On a vertex the result is
+ * that vertex's normal; on an edge it is the linear blend of its endpoints
+ * (the limit of the coordinates there).
+ */
+bsp_vec3 polygon_shading_normal(const polygon_shape *p, const bsp_vec3 *verts,
+                                const bsp_vec3 *normal_pool, bsp_vec3 p_hit)
+{
+    if (p->normals == SHAPE_NO_NORMALS)
+        return p->normal;
+    const bsp_vec3 *vs = verts + p->first;
+    const bsp_vec3 *ns = normal_pool + p->normals;
+    int au = p->axis_u, av = p->axis_v;
+    uint32_t n = p->count;
+    double px = p_hit.v[au], py = p_hit.v[av];
+
+    double lx = vs[n - 1].v[au] - px, ly = vs[n - 1].v[av] - py;
+    double sx = vs[0].v[au] - px, sy = vs[0].v[av] - py;
+    double lr = hypot(lx, ly), r = hypot(sx, sy);
+    /* Only the unusable cases make this NaN, and the loop returns early on
+     * exactly those (vertex n-1 or edge (n-1, 0)) before the sum is used. */
+    double tan_prev = (lx * sy - ly * sx) / (lr * r + (lx * sx + ly * sy));
+
+    bsp_vec3 acc = bsp_v3(0.0, 0.0, 0.0);
+    double wsum = 0.0;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t j = i + 1 < n ? i + 1 : 0;
+        double nx = vs[j].v[au] - px, ny = vs[j].v[av] - py;
+        double nr = hypot(nx, ny);
+        if (r == 0.0)
+            return unit_or(ns[i], p->normal);
+        double det = sx * ny - sy * nx, dot = sx * nx + sy * ny;
+        if (det == 0.0 && dot < 0.0)
+            return unit_or(v3_add(v3_scale(ns[i], nr), v3_scale(ns[j], r)), p->normal);
+        double tan_i = det / (r * nr + dot);
+        double w = (tan_prev + tan_i) / r;
+        acc = v3_madd(acc, ns[i], w);
+        wsum += w;
+        tan_prev = tan_i;
+        sx = nx;
+        sy = ny;
+        r = nr;
+    }
+    bsp_vec3 mean = v3_scale(acc, 1.0 / wsum);
+    return unit_or(mean, p->normal);
+}

@@ -1,0 +1,106 @@
+/*
+ * triangle.c — the triangle: setup, exact bounds, Möller–Trumbore ray
+ * intersection and the interpolated shading normal of patch triangles.
+ *
+ * The triangle intersected is exactly {v0 + u e1 + v e2 : u, v >= 0,
+ * u + v <= 1} on the stored v0, e1, e2. The inside test runs on the
+ * unnormalised barycentrics (sign-corrected so the determinant is positive),
+ * so points exactly on an edge or a vertex are inside. A ray parallel to the
+ * plane (determinant 0, which includes rays lying in the plane) misses. t never
+ * depends on ray->tmin/tmax.
+ */
+#include <math.h>
+
+#include "geom/shapes.h"
+#include "geom/vec.h"
+
+int triangle_setup(triangle_shape *tr, bsp_vec3 a, bsp_vec3 b, bsp_vec3 c, uint32_t normals)
+{
+    bsp_vec3 e1 = v3_sub(b, a), e2 = v3_sub(c, a);
+    bsp_vec3 n = v3_cross(e1, e2);
+    double len = v3_length(n);
+    if (!(len > 0.0) || !isfinite(len))
+        return 0;
+    bsp_vec3 unit = bsp_v3(n.x / len, n.y / len, n.z / len);
+    if (!v3_is_finite(unit))
+        return 0;
+    tr->v0 = a;
+    tr->e1 = e1;
+    tr->e2 = e2;
+    tr->normal = unit;
+    tr->normals = normals;
+    return 1;
+}
+
+/* Widens BOX to hold the exact value of base[k] + edge[k] on every axis: the
+ * rounded sum, moved one ulp outward when the rounding lost something
+ * (the error term is Knuth's TwoSum). */
+static bsp_box add_exact_sum(bsp_box box, bsp_vec3 base, bsp_vec3 edge)
+{
+    for (int k = 0; k < 3; k++) {
+        double a = base.v[k], b = edge.v[k];
+        double s = a + b;
+        double bb = s - a;
+        double err = (a - (s - bb)) + (b - bb);
+        double lo = err < 0.0 ? nextafter(s, -INFINITY) : s;
+        double hi = err > 0.0 ? nextafter(s, INFINITY) : s;
+        if (lo < box.lo.v[k])
+            box.lo.v[k] = lo;
+        if (hi > box.hi.v[k])
+            box.hi.v[k] = hi;
+    }
+    return box;
+}
+
+bsp_box triangle_bounds(const triangle_shape *tr)
+{
+    bsp_box box;
+    box.lo = tr->v0;
+    box.hi = tr->v0;
+    box = add_exact_sum(box, tr->v0, tr->e1);
+    return add_exact_sum(box, tr->v0, tr->e2);
+}
+
+int triangle_intersect(const triangle_shape *tr, const bsp_ray *ray, double *t, double *u,
+                       double *v)
+{
+    bsp_vec3 pvec = v3_cross(ray->dir, tr->e2);
+    double det = v3_dot(tr->e1, pvec);
+    if (det == 0.0)
+        return 0;
+    bsp_vec3 tvec = v3_sub(ray->org, tr->v0);
+    bsp_vec3 qvec = v3_cross(tvec, tr->e1);
+    double bu = v3_dot(tvec, pvec);
+    double bv = v3_dot(ray->dir, qvec);
+    double bt = v3_dot(tr->e2, qvec);
+    if (det < 0.0) {
+        det = -det;
+        bu = -bu;
+        bv = -bv;
+        bt = -bt;
+    }
+    if (!(bu >= 0.0 && bv >= 0.0 && bu + bv <= det))
+        return 0;
+    double tt = bt / det;
+    if (!(tt >= ray->tmin && tt <= ray->tmax))
+        return 0;
+    *t = tt;
+    *u = bu / det;
+    *v = bv / det;
+    return 1;
+}
+
+bsp_vec3 triangle_shading_normal(const triangle_shape *tr, const bsp_vec3 *normal_pool, double u,
+                                 double v)
+{
+    if (tr->normals == SHAPE_NO_NORMALS)
+        return tr->normal;
+    const bsp_vec3 *n = normal_pool + tr->normals;
+    bsp_vec3 sum = v3_scale(n[0], 1.0 - u - v);
+    sum = v3_madd(sum, n[1], u);
+    sum = v3_madd(sum, n[2], v);
+    bsp_vec3 unit = v3_normalize(sum);
+    if (!v3_is_finite(unit) || !(v3_dot(unit, unit) > 0.0))
+        return tr->normal;
+    return unit;
+}
