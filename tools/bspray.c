@@ -136,7 +136,7 @@ static const char render_help[] =
     "  --sampling centres the ordinary convention: N x N pixels, one ray through each pixel\n"
     "                     centre, the view angle spanning the outer pixel edges\n"
     "  --depth N          maximum ray depth, primary rays being depth 1 (default 4)\n"
-    "  --accel METHOD     acceleration method: naive (default)\n"
+    "  --accel METHOD     acceleration method: naive (default), kaplan\n"
     "  --mailbox on|off   test each primitive at most once per ray (default on)\n"
     "  --threads N        worker threads (default: all cores); the image does not depend on it\n"
     "  --stats-json FILE  also write the statistics as JSON\n"
@@ -360,7 +360,7 @@ static const char trace_help[] =
     "\n"
     "  --rays FILE        the rays (required)\n"
     "  --any              occlusion queries instead of closest hits\n"
-    "  --accel METHOD     acceleration method: naive (default)\n"
+    "  --accel METHOD     acceleration method: naive (default), kaplan\n"
     "  --mailbox on|off   test each primitive at most once per ray (default on)\n";
 
 /* Parses one number of a ray line; accepts inf/-inf only where ALLOW_INF. */
@@ -466,7 +466,7 @@ static int cmd_trace(int argc, char **argv)
         } else {
             bsp_hit hit;
             if (bsp_intersect(accel, q, &ray, &hit))
-                printf("hit %" PRIu32 " %.9g\n", hit.prim, hit.t);
+                printf("hit %" PRIu32 " %.9g\n", hit.prim, hit.t + 0.0); /* -0 prints as 0 */
             else
                 puts("miss");
         }

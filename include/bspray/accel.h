@@ -26,13 +26,21 @@ typedef struct bsp_query bsp_query;
 
 typedef enum bsp_accel_kind {
     BSP_ACCEL_NAIVE = 0, /* test every primitive: O(N) per ray, the reference */
+    BSP_ACCEL_KAPLAN,    /* kd-tree, Kaplan's rule: spatial median, axes x, y, z in turn */
     BSP_ACCEL_KIND_COUNT
 } bsp_accel_kind;
+
+/* Hard ceiling of kd-tree depth (it sizes the traversal stack). */
+#define BSP_KD_MAX_DEPTH_LIMIT 64
 
 /* Build options; always start from bsp_build_options_defaults(). */
 typedef struct bsp_build_options {
     bsp_accel_kind kind;
-    int mailbox; /* 1: test each primitive at most once per ray */
+    int mailbox;        /* 1: test each primitive at most once per ray (default 1) */
+    int max_depth;      /* kd-trees: deepest leaf, 1..BSP_KD_MAX_DEPTH_LIMIT; 0: the
+                           method's default (kaplan: 18, the paper's value) */
+    int max_leaf_prims; /* kd-trees: a node with at most this many primitives becomes a
+                           leaf; 0: the method's default (kaplan: 2, the paper's value) */
 } bsp_build_options;
 
 void bsp_build_options_defaults(bsp_build_options *opts);
@@ -52,6 +60,25 @@ const bsp_scene *bsp_accel_scene(const bsp_accel *accel);
 bsp_accel_kind bsp_accel_get_kind(const bsp_accel *accel);
 /* Seconds spent in bsp_accel_build. */
 double bsp_accel_build_seconds(const bsp_accel *accel);
+
+/* Figures of a built tree, with Havran's names (all 0 for the naive method). */
+typedef struct bsp_tree_stats {
+    uint64_t interior_nodes; /* N_IN */
+    uint64_t leaves;         /* N_V */
+    uint64_t empty_leaves;   /* N_EV */
+    uint64_t references;     /* N_OIV: primitive references in leaves */
+    int max_leaf_depth;
+    double avg_leaf_depth;
+    uint64_t bytes;       /* nodes + leaf index lists */
+    double expected_cost; /* SAH cost of the finished tree (traversal 1, intersection 1) */
+} bsp_tree_stats;
+
+void bsp_accel_tree_stats(const bsp_accel *accel, bsp_tree_stats *stats);
+
+/* Checks the structure's invariants (child indices in range, depth within
+ * the limit, every primitive whose bounds overlap a leaf's box listed in that
+ * leaf). BSP_OK, or BSP_ERR_INVALID with the first violation in ERR. */
+bsp_status bsp_accel_check(const bsp_accel *accel, bsp_error *err);
 
 /* Per-query counters, accumulated over every call made with one bsp_query. */
 typedef struct bsp_query_counters {

@@ -6,9 +6,9 @@
 #include <string.h>
 #include <time.h>
 
-#include "accel/accel_internal.h"
+#include "accel/kd_tree.h"
 
-static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {"naive"};
+static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {"naive", "kaplan"};
 
 double accel_now(void)
 {
@@ -65,6 +65,9 @@ bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts
     case BSP_ACCEL_NAIVE:
         st = naive_build(a, err);
         break;
+    case BSP_ACCEL_KAPLAN:
+        st = kd_accel_build(a, err);
+        break;
     default:
         st = error_set(err, BSP_ERR_INVALID, NULL, 0, "unknown acceleration method %d",
                        (int)a->opts.kind);
@@ -101,6 +104,21 @@ bsp_accel_kind bsp_accel_get_kind(const bsp_accel *a)
 double bsp_accel_build_seconds(const bsp_accel *a)
 {
     return a->build_seconds;
+}
+
+void bsp_accel_tree_stats(const bsp_accel *a, bsp_tree_stats *st)
+{
+    if (a->opts.kind == BSP_ACCEL_NAIVE)
+        memset(st, 0, sizeof *st);
+    else
+        kd_tree_stats(a->impl, st);
+}
+
+bsp_status bsp_accel_check(const bsp_accel *a, bsp_error *err)
+{
+    if (a->opts.kind == BSP_ACCEL_NAIVE)
+        return BSP_OK;
+    return kd_tree_check(a->impl, a->scene, err);
 }
 
 bsp_query *bsp_query_create(const bsp_accel *a)

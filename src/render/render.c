@@ -216,19 +216,6 @@ static void *worker_main(void *arg)
     return NULL;
 }
 
-static double scene_scale(const bsp_scene *s)
-{
-    bsp_box b = bsp_scene_bounds(s);
-    double scale = 1.0;
-    if (!box_is_empty(b)) {
-        for (int k = 0; k < 3; k++) {
-            scale = fmax(scale, fabs(b.lo.v[k]));
-            scale = fmax(scale, fabs(b.hi.v[k]));
-        }
-    }
-    return scale;
-}
-
 static void add_stats(bsp_render_stats *to, const bsp_render_stats *from)
 {
     for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {

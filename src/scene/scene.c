@@ -405,6 +405,18 @@ bsp_box bsp_scene_bounds(const bsp_scene *s)
     return s->bounds;
 }
 
+double scene_scale(const bsp_scene *s)
+{
+    double scale = 1.0;
+    if (!box_is_empty(s->bounds)) {
+        for (int k = 0; k < 3; k++) {
+            scale = fmax(scale, fabs(s->bounds.lo.v[k]));
+            scale = fmax(scale, fabs(s->bounds.hi.v[k]));
+        }
+    }
+    return scale;
+}
+
 size_t bsp_scene_kind_count(const bsp_scene *s, bsp_prim_kind kind)
 {
     return (unsigned)kind < BSP_PRIM_KIND_COUNT ? s->kind_count[kind] : 0;

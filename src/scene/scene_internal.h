@@ -120,6 +120,13 @@ HIDDEN void scene_finish(bsp_scene *s);
 /* Sets where the next primitives come from, for messages (NAME borrowed). */
 HIDDEN void scene_set_source(bsp_scene *s, const char *name, size_t line);
 
+/* The scene's scale: the largest absolute coordinate of its bounds, at least
+ * 1. Offsets for secondary rays and kd-tree padding are relative to it. */
+HIDDEN double scene_scale(const bsp_scene *s);
+
+/* Reads an NFF file (plain or gzip): bsp_scene_load without the dispatch. */
+HIDDEN bsp_status nff_load_file(const char *path, bsp_scene **out, bsp_error *err);
+
 /* Intersection dispatch used by every accelerator (inline for speed): the t
  * computed never depends on ray->tmin / ray->tmax, which only filter. */
 static inline int scene_intersect(const bsp_scene *s, uint32_t prim, const bsp_ray *ray,

@@ -1,0 +1,106 @@
+/*
+ * kd_split_median.c — Kaplan's BSP: every node is cut at the spatial median
+ * of its box, the axes taken in turn x, y, z by depth; a node becomes a leaf
+ * at the depth limit or with at most max_leaf_prims primitives (the paper:
+ * 18 and 2).
+ *
+ * Primitive lists live in one growable scratch stack: a node's list is at
+ * [base, base + n), its children's lists are written at the first free index
+ * above it, and the left subtree works above both, so the right list
+ * survives until its turn. Everything is addressed by index, so growing the stack is safe.
+ */
+#include <stdlib.h>
+
+#include "accel/kd_tree.h"
+
+typedef struct median_build {
+    kd_tree *t;
+    bsp_box *pbox; /* padded bounds per primitive */
+    uint32_t *scratch;
+    size_t cap;
+    bsp_error *err;
+} median_build;
+
+static int reserve(median_build *b, size_t need)
+{
+    if (need <= b->cap)
+        return 1;
+    size_t ncap = b->cap * 2 > need ? b->cap * 2 : need;
+    uint32_t *ns = realloc(b->scratch, ncap * sizeof *ns);
+    if (!ns)
+        return 0;
+    b->scratch = ns;
+    b->cap = ncap;
+    return 1;
+}
+
+static bsp_status oom(median_build *b)
+{
+    return error_set(b->err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
+}
+
+/* The node's list is scratch[base, base + n); scratch[top, ...) is free. */
+static bsp_status build_node(median_build *b, uint32_t node, bsp_box box, size_t base, size_t n,
+                             size_t top, int depth)
+{
+    kd_tree *t = b->t;
+    unsigned axis = (unsigned)(depth % 3);
+    double lo = box.lo.v[axis], hi = box.hi.v[axis];
+    float split = (float)(0.5 * (lo + hi));
+    double s = (double)split;
+    /* a leaf by the limits, or when the box is too thin for a float plane */
+    if (n <= (size_t)t->max_leaf_prims || depth >= t->max_depth || !(s > lo && s < hi))
+        return kd_make_leaf(t, node, b->scratch + base, n) ? BSP_OK : oom(b);
+
+    if (!reserve(b, top + 2 * n))
+        return oom(b);
+    size_t left = top, nl = 0;
+    for (size_t k = 0; k < n; k++) {
+        uint32_t p = b->scratch[base + k];
+        if (b->pbox[p].lo.v[axis] <= s)
+            b->scratch[left + nl++] = p;
+    }
+    size_t right = left + nl, nr = 0;
+    for (size_t k = 0; k < n; k++) {
+        uint32_t p = b->scratch[base + k];
+        if (b->pbox[p].hi.v[axis] >= s)
+            b->scratch[right + nr++] = p;
+    }
+    uint32_t child = kd_alloc_pair(t);
+    if (child == UINT32_MAX)
+        return oom(b);
+    kd_make_interior(t, node, axis, split, child);
+    bsp_box lb = box, rb = box;
+    lb.hi.v[axis] = rb.lo.v[axis] = s;
+    /* the left subtree works above both lists; then the right one may reuse it */
+    bsp_status st = build_node(b, child, lb, left, nl, right + nr, depth + 1);
+    if (st == BSP_OK)
+        st = build_node(b, child + 1, rb, right, nr, right + nr, depth + 1);
+    return st;
+}
+
+bsp_status kd_build_median(kd_tree *t, const bsp_scene *scene, bsp_error *err)
+{
+    size_t np = bsp_scene_prim_count(scene);
+    median_build b = {t, NULL, NULL, 0, err};
+    b.pbox = malloc((np ? np : 1) * sizeof *b.pbox);
+    b.cap = 4 * np + 64;
+    b.scratch = malloc(b.cap * sizeof *b.scratch);
+    bsp_status st = BSP_OK;
+    if (!b.pbox || !b.scratch) {
+        st = oom(&b);
+    } else {
+        size_t n = 0;
+        for (uint32_t p = 0; p < np; p++) {
+            if (bsp_scene_prim_kind(scene, p) == BSP_PRIM_DROPPED)
+                continue;
+            b.pbox[p] = kd_prim_box(t, scene, p);
+            b.scratch[n++] = p;
+        }
+        if (n > 0)
+            st = build_node(&b, 0, t->box, 0, n, n, 0);
+    }
+    free(b.pbox);
+    free(b.scratch);
+    return st;
+}

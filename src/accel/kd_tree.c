@@ -1,0 +1,324 @@
+/*
+ * kd_tree.c — storage of the compact kd-tree, the accel front end for all
+ * kd-tree rules, the tree statistics walk and the invariant checker.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "accel/kd_tree.h"
+#include "geom/vec.h"
+
+int kd_tree_init(kd_tree *t, const bsp_scene *scene, int max_depth, int max_leaf_prims)
+{
+    memset(t, 0, sizeof *t);
+    t->max_depth = max_depth;
+    t->max_leaf_prims = max_leaf_prims;
+    t->pad = KD_PAD_REL * scene_scale(scene);
+    bsp_box b = bsp_scene_bounds(scene);
+    if (!box_is_empty(b)) {
+        for (int k = 0; k < 3; k++) {
+            b.lo.v[k] -= t->pad;
+            b.hi.v[k] += t->pad;
+        }
+    }
+    t->box = b;
+    t->cap_nodes = 1024;
+    t->nodes = malloc(t->cap_nodes * sizeof *t->nodes);
+    if (!t->nodes)
+        return 0;
+    t->nnodes = 1; /* the root */
+    t->nodes[0].u.first = 0;
+    t->nodes[0].bits = KD_LEAF_TAG; /* an empty leaf until built */
+    return 1;
+}
+
+void kd_tree_free(kd_tree *t)
+{
+    if (!t)
+        return;
+    free(t->nodes);
+    free(t->prims);
+    memset(t, 0, sizeof *t);
+}
+
+uint32_t kd_alloc_pair(kd_tree *t)
+{
+    if (t->nnodes > KD_MAX_NODES - 2)
+        return UINT32_MAX;
+    if (t->nnodes + 2 > t->cap_nodes) {
+        uint32_t ncap = t->cap_nodes * 2;
+        if (ncap > KD_MAX_NODES)
+            ncap = KD_MAX_NODES;
+        kd_node *nn = realloc(t->nodes, (size_t)ncap * sizeof *nn);
+        if (!nn)
+            return UINT32_MAX;
+        t->nodes = nn;
+        t->cap_nodes = ncap;
+    }
+    uint32_t i = t->nnodes;
+    t->nnodes += 2;
+    return i;
+}
+
+int kd_make_leaf(kd_tree *t, uint32_t i, const uint32_t *prims, size_t n)
+{
+    if (n >= ((size_t)1 << 30) || t->nprims + n > UINT32_MAX)
+        return 0;
+    if (t->nprims + n > t->cap_prims) {
+        size_t ncap = t->cap_prims ? t->cap_prims : 1024;
+        while (ncap < t->nprims + n)
+            ncap *= 2;
+        uint32_t *np = realloc(t->prims, ncap * sizeof *np);
+        if (!np)
+            return 0;
+        t->prims = np;
+        t->cap_prims = ncap;
+    }
+    memcpy(t->prims + t->nprims, prims, n * sizeof *prims);
+    t->nodes[i].u.first = (uint32_t)t->nprims;
+    t->nodes[i].bits = ((uint32_t)n << 2) | KD_LEAF_TAG;
+    t->nprims += n;
+    return 1;
+}
+
+void kd_make_interior(kd_tree *t, uint32_t i, unsigned axis, float split, uint32_t child)
+{
+    t->nodes[i].u.split = split;
+    t->nodes[i].bits = (child << 2) | axis;
+}
+
+bsp_box kd_prim_box(const kd_tree *t, const bsp_scene *scene, uint32_t prim)
+{
+    bsp_box b = bsp_scene_prim_bounds(scene, prim);
+    for (int k = 0; k < 3; k++) {
+        b.lo.v[k] -= t->pad;
+        b.hi.v[k] += t->pad;
+    }
+    return b;
+}
+
+/* --- statistics ------------------------------------------------------------------- */
+
+static double box_area(bsp_box b)
+{
+    double dx = b.hi.x - b.lo.x, dy = b.hi.y - b.lo.y, dz = b.hi.z - b.lo.z;
+    return 2.0 * (dx * dy + dy * dz + dz * dx);
+}
+
+typedef struct stats_walk {
+    const kd_tree *t;
+    bsp_tree_stats *st;
+    double depth_sum;
+    double cost; /* sum of area-weighted costs, divided by the root area at the end */
+} stats_walk;
+
+static void stats_node(stats_walk *w, uint32_t i, bsp_box box, int depth)
+{
+    const kd_node *n = &w->t->nodes[i];
+    if (kd_is_leaf(n)) {
+        uint32_t c = kd_count(n);
+        w->st->leaves++;
+        w->st->empty_leaves += c == 0;
+        w->st->references += c;
+        w->depth_sum += depth;
+        if (depth > w->st->max_leaf_depth)
+            w->st->max_leaf_depth = depth;
+        w->cost += box_area(box) * (double)c;
+        return;
+    }
+    w->st->interior_nodes++;
+    w->cost += box_area(box);
+    unsigned axis = kd_axis(n);
+    bsp_box l = box, r = box;
+    l.hi.v[axis] = r.lo.v[axis] = (double)n->u.split;
+    stats_node(w, kd_child(n), l, depth + 1);
+    stats_node(w, kd_child(n) + 1, r, depth + 1);
+}
+
+void kd_tree_stats(const kd_tree *t, bsp_tree_stats *st)
+{
+    memset(st, 0, sizeof *st);
+    stats_walk w = {t, st, 0.0, 0.0};
+    stats_node(&w, 0, t->box, 0);
+    st->avg_leaf_depth = st->leaves ? w.depth_sum / (double)st->leaves : 0.0;
+    st->bytes = (uint64_t)t->nnodes * sizeof(kd_node) + (uint64_t)t->nprims * sizeof(uint32_t);
+    double root = box_area(t->box);
+    st->expected_cost = root > 0 ? w.cost / root : 0.0;
+}
+
+/* --- invariant checker -------------------------------------------------------------- */
+
+typedef struct check_walk {
+    const kd_tree *t;
+    const bsp_scene *scene;
+    bsp_box *pbox;    /* padded bounds per primitive */
+    uint32_t *lists;  /* scratch: primitive lists of the nodes on the path */
+    size_t cap, top;
+    char *seen;       /* per primitive: listed in the current leaf */
+    bsp_error *err;
+    bsp_status st;
+} check_walk;
+
+static int boxes_overlap(bsp_box a, bsp_box b)
+{
+    for (int k = 0; k < 3; k++)
+        if (a.lo.v[k] > b.hi.v[k] || b.lo.v[k] > a.hi.v[k])
+            return 0;
+    return 1;
+}
+
+static int check_fail(check_walk *w, const char *fmt, uint32_t a, uint32_t b)
+{
+    if (w->st == BSP_OK)
+        w->st = error_set(w->err, BSP_ERR_INVALID, NULL, 0, fmt, a, b);
+    return 0;
+}
+
+/* LIST..LIST+N: the primitives whose padded bounds overlap BOX. */
+static int check_node(check_walk *w, uint32_t i, bsp_box box, size_t list, size_t n, int depth)
+{
+    const kd_tree *t = w->t;
+    if (depth > t->max_depth)
+        return check_fail(w, "kd-tree: node %u is deeper than the limit %u", i,
+                          (uint32_t)t->max_depth);
+    const kd_node *nd = &t->nodes[i];
+    if (kd_is_leaf(nd)) {
+        uint32_t first = nd->u.first, c = kd_count(nd);
+        if ((size_t)first + c > t->nprims)
+            return check_fail(w, "kd-tree: leaf %u lists entries past the end (%u)", i, first);
+        for (uint32_t k = 0; k < c; k++) {
+            uint32_t p = t->prims[first + k];
+            if (p >= bsp_scene_prim_count(w->scene))
+                return check_fail(w, "kd-tree: leaf %u lists primitive %u, out of range", i, p);
+            w->seen[p] = 1;
+        }
+        int ok = 1;
+        for (size_t k = 0; k < n && ok; k++) {
+            uint32_t p = w->lists[list + k];
+            if (!w->seen[p])
+                ok = check_fail(w, "kd-tree: primitive %u overlaps leaf %u but is not listed", p,
+                                i);
+        }
+        for (uint32_t k = 0; k < c; k++)
+            w->seen[t->prims[first + k]] = 0;
+        return ok;
+    }
+    uint32_t child = kd_child(nd);
+    if (child <= i || child + 1 >= t->nnodes)
+        return check_fail(w, "kd-tree: node %u has child index %u out of range", i, child);
+    unsigned axis = kd_axis(nd);
+    double s = (double)nd->u.split;
+    if (!(s >= box.lo.v[axis] && s <= box.hi.v[axis]))
+        return check_fail(w, "kd-tree: node %u splits outside its box on axis %u", i, axis);
+    bsp_box lb = box, rb = box;
+    lb.hi.v[axis] = rb.lo.v[axis] = s;
+    for (int side = 0; side < 2; side++) {
+        bsp_box cb = side ? rb : lb;
+        size_t base = w->top;
+        if (base + n > w->cap) {
+            size_t ncap = w->cap * 2 > base + n ? w->cap * 2 : base + n;
+            uint32_t *nl = realloc(w->lists, ncap * sizeof *nl);
+            if (!nl) {
+                w->st = error_set(w->err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+                return 0;
+            }
+            w->lists = nl;
+            w->cap = ncap;
+        }
+        size_t m = 0;
+        for (size_t k = 0; k < n; k++) {
+            uint32_t p = w->lists[list + k];
+            if (boxes_overlap(w->pbox[p], cb))
+                w->lists[base + m++] = p;
+        }
+        w->top = base + m;
+        int ok = check_node(w, child + (uint32_t)side, cb, base, m, depth + 1);
+        w->top = base;
+        if (!ok)
+            return 0;
+    }
+    return 1;
+}
+
+bsp_status kd_tree_check(const kd_tree *t, const bsp_scene *scene, bsp_error *err)
+{
+    size_t np = bsp_scene_prim_count(scene);
+    check_walk w = {t, scene, NULL, NULL, 0, 0, NULL, err, BSP_OK};
+    w.pbox = malloc((np ? np : 1) * sizeof *w.pbox);
+    w.seen = calloc(np ? np : 1, 1);
+    w.cap = 2 * np + 16;
+    w.lists = malloc(w.cap * sizeof *w.lists);
+    if (!w.pbox || !w.seen || !w.lists) {
+        free(w.pbox);
+        free(w.seen);
+        free(w.lists);
+        return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    }
+    size_t n = 0;
+    for (uint32_t p = 0; p < np; p++) {
+        if (bsp_scene_prim_kind(scene, p) == BSP_PRIM_DROPPED)
+            continue;
+        w.pbox[p] = kd_prim_box(t, scene, p);
+        w.lists[n++] = p;
+    }
+    w.top = n;
+    if (t->nnodes == 0)
+        error_set(err, BSP_ERR_INVALID, NULL, 0, "kd-tree: no nodes");
+    else if (n > 0 && box_is_empty(t->box))
+        w.st = error_set(err, BSP_ERR_INVALID, NULL, 0, "kd-tree: empty root box");
+    else
+        check_node(&w, 0, t->box, 0, n, 0);
+    free(w.pbox);
+    free(w.seen);
+    free(w.lists);
+    return w.st;
+}
+
+/* --- accel front end ------------------------------------------------------------------ */
+
+static void kd_destroy(void *impl)
+{
+    kd_tree_free(impl);
+    free(impl);
+}
+
+static const accel_ops kd_ops = {kd_intersect, kd_occluded, kd_destroy};
+
+bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
+{
+    bsp_build_options *o = &a->opts;
+    if (o->max_depth == 0)
+        o->max_depth = 18;
+    if (o->max_leaf_prims == 0)
+        o->max_leaf_prims = 2;
+    if (o->max_depth < 1 || o->max_depth > BSP_KD_MAX_DEPTH_LIMIT)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "kd-tree depth %d is outside 1..%d",
+                         o->max_depth, BSP_KD_MAX_DEPTH_LIMIT);
+    if (o->max_leaf_prims < 1)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                         "kd-tree leaf size %d must be at least 1", o->max_leaf_prims);
+    kd_tree *t = malloc(sizeof *t);
+    if (!t || !kd_tree_init(t, a->scene, o->max_depth, o->max_leaf_prims)) {
+        if (t)
+            kd_tree_free(t);
+        free(t);
+        return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    }
+    bsp_status st;
+    switch (o->kind) {
+    case BSP_ACCEL_KAPLAN:
+        st = kd_build_median(t, a->scene, err);
+        break;
+    default:
+        st = error_set(err, BSP_ERR_INVALID, NULL, 0, "not a kd-tree rule");
+        break;
+    }
+    if (st != BSP_OK) {
+        kd_destroy(t);
+        return st;
+    }
+    a->ops = &kd_ops;
+    a->impl = t;
+    return BSP_OK;
+}

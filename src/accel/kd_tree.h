@@ -1,0 +1,102 @@
+/*
+ * kd_tree.h — the compact kd-tree (axis-aligned BSP tree) shared by every
+ * construction rule, and the interface between the builders and the rest.
+ *
+ * Node layout (Havran's cache-sensitive representation, as pbrt and Mitsuba
+ * also use it): 8 bytes per node in one array; the two children of an
+ * interior node are adjacent (left at `child`, right at `child + 1`), and
+ * the whole array is in depth-first order from the root at index 0. A leaf's
+ * primitives are a run in one shared index array.
+ *
+ * Conservative assignment invariant (what exactness rests on): a primitive
+ * is listed in every leaf whose closed box its bounds, padded by `pad`,
+ * overlap. The padding (KD_PAD_REL times the scene scale) is far larger than
+ * the rounding error of any computed hit point or t, so a traversal that
+ * tests the primitives of every leaf the ray's segment passes through, and
+ * stops only once the closest hit lies inside the current cell, returns what
+ * the naive method returns.
+ */
+#ifndef BSPRAY_ACCEL_KD_TREE_H
+#define BSPRAY_ACCEL_KD_TREE_H
+
+#include <stdint.h>
+
+#include "accel/accel_internal.h"
+
+/* Bounds padding relative to the scene scale (see the invariant above). */
+#define KD_PAD_REL 1e-7
+
+#define KD_LEAF_TAG 3u
+
+typedef struct kd_node {
+    union {
+        float split;    /* interior: the plane's coordinate on `axis` */
+        uint32_t first; /* leaf: first entry in kd_tree.prims */
+    } u;
+    uint32_t bits; /* low 2 bits: axis 0..2, or KD_LEAF_TAG; upper 30 bits:
+                      interior: index of the left child (right = left + 1);
+                      leaf: primitive count */
+} kd_node;
+
+_Static_assert(sizeof(kd_node) == 8, "kd-tree nodes are 8 bytes");
+
+#define KD_MAX_NODES ((uint32_t)1 << 30)
+
+static inline int kd_is_leaf(const kd_node *n)
+{
+    return (n->bits & 3u) == KD_LEAF_TAG;
+}
+static inline unsigned kd_axis(const kd_node *n)
+{
+    return n->bits & 3u;
+}
+static inline uint32_t kd_child(const kd_node *n)
+{
+    return n->bits >> 2;
+}
+static inline uint32_t kd_count(const kd_node *n)
+{
+    return n->bits >> 2;
+}
+
+typedef struct kd_tree {
+    kd_node *nodes;
+    uint32_t nnodes, cap_nodes;
+    uint32_t *prims; /* leaf index lists */
+    size_t nprims, cap_prims;
+    bsp_box box;    /* root cell: the scene bounds grown by pad */
+    double pad;     /* bounds padding used for assignment */
+    int max_depth;  /* the enforced limit (sizes the traversal stack) */
+    int max_leaf_prims;
+} kd_tree;
+
+/* --- used by builders ------------------------------------------------------ */
+
+/* Appends two adjacent nodes and returns the index of the first, or
+ * UINT32_MAX when out of memory or past KD_MAX_NODES. */
+HIDDEN uint32_t kd_alloc_pair(kd_tree *t);
+/* Makes node I a leaf listing PRIMS[0..N). Returns 0 when out of memory. */
+HIDDEN int kd_make_leaf(kd_tree *t, uint32_t i, const uint32_t *prims, size_t n);
+/* Makes node I interior with children at CHILD, CHILD + 1. */
+HIDDEN void kd_make_interior(kd_tree *t, uint32_t i, unsigned axis, float split, uint32_t child);
+
+/* Sets up an empty tree over SCENE: root box, padding, limits. Returns 0 when
+ * out of memory. */
+HIDDEN int kd_tree_init(kd_tree *t, const bsp_scene *scene, int max_depth, int max_leaf_prims);
+HIDDEN void kd_tree_free(kd_tree *t);
+
+/* The padded bounds of primitive PRIM. */
+HIDDEN bsp_box kd_prim_box(const kd_tree *t, const bsp_scene *scene, uint32_t prim);
+
+/* Kaplan's rule: spatial median, axes in turn. Fills T (already set up). */
+HIDDEN bsp_status kd_build_median(kd_tree *t, const bsp_scene *scene, bsp_error *err);
+
+/* --- used by the accel front end --------------------------------------------- */
+
+HIDDEN bsp_status kd_accel_build(bsp_accel *a, bsp_error *err);
+HIDDEN int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit);
+HIDDEN int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray);
+HIDDEN void kd_tree_stats(const kd_tree *t, bsp_tree_stats *st);
+HIDDEN bsp_status kd_tree_check(const kd_tree *t, const bsp_scene *scene, bsp_error *err);
+
+#endif /* BSPRAY_ACCEL_KD_TREE_H */

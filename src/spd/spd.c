@@ -1,0 +1,354 @@
+/*
+ * spd.c — the SPD scene registry ("spd:NAME[:SIZE]"), the two sinks (one
+ * builds a bsp_scene through the public add_* calls, one prints NFF text the
+ * way the SPD programs do) and the entry points declared in spd.h.
+ */
+#include <string.h>
+#include <strings.h>
+
+#include "scene/scene_internal.h"
+#include "spd/spd.h"
+
+/* --- registry -------------------------------------------------------------- */
+
+typedef struct spd_entry {
+    const char *name;
+    int def, min, max; /* size factors; max keeps scenes under ~10^8 primitives */
+    spd_generator gen;
+} spd_entry;
+
+/* In priority order (balls is the project's default scene). The defaults are
+ * the SPD programs' own; every entry reproduces the reference NFF file of
+ * its program (../shared/scenes/spd) exactly. */
+static const spd_entry registry[] = {
+    /* 9^0 + ... + 9^SF spheres: SF 8 gives 48 million */
+    {"balls", 4, 1, 8, spd_gen_balls},
+    /* 4^SF triangles: SF 13 gives 67 million */
+    {"tetra", 6, 1, 13, spd_gen_tetra},
+    /* 2^(SF+1) - 1 cones and as many spheres: SF 24 gives 67 million in all */
+    {"tree", 11, 1, 24, spd_gen_tree},
+    /* 10 SF (SF+1) (2 SF+1) + 1 primitives: SF 170 gives 99 million */
+    {"rings", 7, 1, 170, spd_gen_rings},
+    /* 146 SF^3 + 1 polygons: SF 88 gives 99.5 million */
+    {"gears", 4, 1, 88, spd_gen_gears},
+    /* 2 * 4^SF + 4: the original hash shifts by 7 - SF bits, so SF <= 7 */
+    {"mount", 6, 1, 7, spd_gen_mount},
+    /* (SF+1)^3 spheres + 3 SF (SF+1)^2 cylinders: SF 290 gives 99 million */
+    {"lattice", 12, 1, 290, spd_gen_lattice},
+    /* 64 SF^2 - 8 SF triangles + SF^2 squares: SF 1240 gives 99.9 million */
+    {"teapot", 6, 1, 1240, spd_gen_teapot},
+    /* 180 * 2^SF + 1 spheres: SF 19 gives 94 million */
+    {"shells", 5, 1, 19, spd_gen_shells},
+    /* 9 (8^SF - 1) / 7 primitives: SF 8 gives 21.6 million (SF 9: 173 million) */
+    {"jacks", 1, 1, 8, spd_gen_jacks},
+    /* 2 (32 * 2^(SF-1) - 1)^2 triangles: SF 8 gives 33.5 million */
+    {"sombrero", 1, 1, 8, spd_gen_sombrero},
+    /* fixed: 864 patch triangles, 16 triangles, 1 cone (SPD ignores the size) */
+    {"sample", 1, 1, 1, spd_gen_sample},
+    /* fixed: 1500 patch triangles (SPD ignores the size) */
+    {"nurbtst", 1, 1, 1, spd_gen_nurbtst},
+};
+
+#define REGISTRY_COUNT (sizeof registry / sizeof registry[0])
+
+static const spd_entry *find_entry(const char *name, size_t len)
+{
+    for (size_t i = 0; i < REGISTRY_COUNT; i++)
+        if (strlen(registry[i].name) == len && strncasecmp(registry[i].name, name, len) == 0)
+            return &registry[i];
+    return NULL;
+}
+
+const char *spd_scene_names(void)
+{
+    static char names[256];
+    if (!names[0]) {
+        size_t used = 0;
+        for (size_t i = 0; i < REGISTRY_COUNT; i++) {
+            int n = snprintf(names + used, sizeof names - used, "%s%s", i ? " " : "",
+                             registry[i].name);
+            if (n < 0 || (size_t)n >= sizeof names - used)
+                break;
+            used += (size_t)n;
+        }
+    }
+    return names;
+}
+
+int spd_scene_sizes(const char *name, int *def, int *min, int *max)
+{
+    const spd_entry *e = name ? find_entry(name, strlen(name)) : NULL;
+    if (!e)
+        return 0;
+    if (def)
+        *def = e->def;
+    if (min)
+        *min = e->min;
+    if (max)
+        *max = e->max;
+    return 1;
+}
+
+static bsp_status unknown_name(bsp_error *err, const char *name, size_t len)
+{
+    return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                     "unknown SPD scene '%.*s' (known scenes: %s)", (int)(len > 64 ? 64 : len),
+                     name, spd_scene_names());
+}
+
+static bsp_status bad_size(bsp_error *err, const spd_entry *e, const char *size_text)
+{
+    if (e->min == e->max)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                         "SPD scene '%s': bad size factor '%s' (this scene has a fixed size; "
+                         "the only valid size is %d)",
+                         e->name, size_text, e->min);
+    return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                     "SPD scene '%s': bad size factor '%s' (valid sizes are %d to %d; "
+                     "the default is %d)",
+                     e->name, size_text, e->min, e->max, e->def);
+}
+
+/* Parses a decimal size factor (digits only) into *SIZE. */
+static int parse_size(const char *text, int *size)
+{
+    if (!*text || strlen(text) > 9)
+        return 0;
+    long v = 0;
+    for (const char *p = text; *p; p++) {
+        if (*p < '0' || *p > '9')
+            return 0;
+        v = v * 10 + (*p - '0');
+    }
+    *size = (int)v;
+    return 1;
+}
+
+/* --- the scene sink -------------------------------------------------------- */
+
+typedef struct scene_ctx {
+    bsp_scene *scene;
+    bsp_error *err;
+} scene_ctx;
+
+/* The scene's add_* calls already wrote their message into the error. */
+static void scene_check(spd_sink *s, bsp_status st)
+{
+    if (st != BSP_OK && s->failed == BSP_OK)
+        s->failed = st;
+}
+
+static void sc_background(spd_sink *s, const double rgb[3])
+{
+    bsp_scene_set_background(((scene_ctx *)s->ctx)->scene, rgb);
+}
+
+static void sc_view(spd_sink *s, bsp_vec3 from, bsp_vec3 at, bsp_vec3 up, double angle,
+                    double hither, int resx, int resy)
+{
+    scene_ctx *c = s->ctx;
+    bsp_camera cam;
+    cam.from = from;
+    cam.at = at;
+    cam.up = up;
+    cam.angle_deg = angle;
+    cam.hither = hither;
+    cam.res_x = resx;
+    cam.res_y = resy;
+    scene_check(s, bsp_scene_set_camera(c->scene, &cam, c->err));
+}
+
+static void sc_light(spd_sink *s, bsp_vec3 pos)
+{
+    scene_ctx *c = s->ctx;
+    bsp_light l;
+    l.pos = pos;
+    l.color[0] = l.color[1] = l.color[2] = 1.0;
+    l.has_color = 0;
+    scene_check(s, bsp_scene_add_light(c->scene, &l, c->err));
+}
+
+static void sc_material(spd_sink *s, const double rgb[3], double kd, double ks, double shine,
+                        double t, double ior)
+{
+    scene_ctx *c = s->ctx;
+    bsp_material m;
+    m.color[0] = rgb[0];
+    m.color[1] = rgb[1];
+    m.color[2] = rgb[2];
+    m.kd = kd;
+    m.ks = ks;
+    m.shine = shine;
+    m.t = t;
+    m.ior = ior;
+    scene_check(s, bsp_scene_set_material(c->scene, &m, c->err));
+}
+
+static void sc_sphere(spd_sink *s, bsp_vec3 center, double radius)
+{
+    scene_ctx *c = s->ctx;
+    scene_check(s, bsp_scene_add_sphere(c->scene, center, radius, c->err));
+}
+
+static void sc_cone(spd_sink *s, bsp_vec3 base, double rb, bsp_vec3 apex, double ra)
+{
+    scene_ctx *c = s->ctx;
+    scene_check(s, bsp_scene_add_cone(c->scene, base, rb, apex, ra, c->err));
+}
+
+static void sc_polygon(spd_sink *s, const bsp_vec3 *v, int n)
+{
+    scene_ctx *c = s->ctx;
+    scene_check(s, bsp_scene_add_polygon(c->scene, v, (size_t)n, c->err));
+}
+
+static void sc_patch(spd_sink *s, const bsp_vec3 *v, const bsp_vec3 *nrm, int n)
+{
+    scene_ctx *c = s->ctx;
+    scene_check(s, bsp_scene_add_patch(c->scene, v, nrm, (size_t)n, c->err));
+}
+
+bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error *err)
+{
+    if (out)
+        *out = NULL;
+    if (!spec || !out)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "spd: no scene specification given");
+    if (strncmp(spec, "spd:", 4) != 0)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                         "'%.64s' is not an SPD scene (expected spd:NAME or spd:NAME:SIZE; "
+                         "known scenes: %s)",
+                         spec, spd_scene_names());
+    const char *name = spec + 4;
+    const char *colon = strchr(name, ':');
+    size_t len = colon ? (size_t)(colon - name) : strlen(name);
+    const spd_entry *e = find_entry(name, len);
+    if (!e)
+        return unknown_name(err, name, len);
+    int size = e->def;
+    if (colon && (!parse_size(colon + 1, &size) || size < e->min || size > e->max))
+        return bad_size(err, e, colon + 1);
+
+    bsp_scene *scene = bsp_scene_create();
+    if (!scene)
+        return error_set(err, BSP_ERR_NOMEM, NULL, 0, "spd:%s: out of memory", e->name);
+    scene_ctx ctx = {scene, err};
+    spd_sink sink = {.ctx = &ctx,
+                     .failed = BSP_OK,
+                     .gen_error = NULL,
+                     .background = sc_background,
+                     .view = sc_view,
+                     .light = sc_light,
+                     .material = sc_material,
+                     .sphere = sc_sphere,
+                     .cone = sc_cone,
+                     .polygon = sc_polygon,
+                     .patch = sc_patch};
+    e->gen(size, &sink);
+    if (sink.failed != BSP_OK) {
+        bsp_scene_destroy(scene);
+        if (sink.gen_error)
+            error_set(err, sink.failed, NULL, 0, "spd:%s:%d: %s", e->name, size,
+                      sink.gen_error);
+        return sink.failed;
+    }
+    scene_finish(scene);
+    *out = scene;
+    return BSP_OK;
+}
+
+/* --- the NFF text sink ------------------------------------------------------ */
+
+static void nff_check(spd_sink *s, int printed)
+{
+    if (printed < 0 && s->failed == BSP_OK)
+        s->failed = BSP_ERR_IO;
+}
+
+static void nf_background(spd_sink *s, const double rgb[3])
+{
+    nff_check(s, fprintf(s->ctx, "b %g %g %g\n", rgb[0], rgb[1], rgb[2]));
+}
+
+static void nf_view(spd_sink *s, bsp_vec3 from, bsp_vec3 at, bsp_vec3 up, double angle,
+                    double hither, int resx, int resy)
+{
+    nff_check(s, fprintf(s->ctx,
+                         "v\nfrom %g %g %g\nat %g %g %g\nup %g %g %g\nangle %g\nhither %g\n"
+                         "resolution %d %d\n",
+                         from.x, from.y, from.z, at.x, at.y, at.z, up.x, up.y, up.z, angle,
+                         hither, resx, resy));
+}
+
+static void nf_light(spd_sink *s, bsp_vec3 pos)
+{
+    nff_check(s, fprintf(s->ctx, "l %g %g %g\n", pos.x, pos.y, pos.z));
+}
+
+static void nf_material(spd_sink *s, const double rgb[3], double kd, double ks, double shine,
+                        double t, double ior)
+{
+    nff_check(s, fprintf(s->ctx, "f %g %g %g %g %g %g %g %g\n", rgb[0], rgb[1], rgb[2], kd, ks,
+                         shine, t, ior));
+}
+
+static void nf_sphere(spd_sink *s, bsp_vec3 c, double r)
+{
+    nff_check(s, fprintf(s->ctx, "s %g %g %g %g\n", c.x, c.y, c.z, r));
+}
+
+static void nf_cone(spd_sink *s, bsp_vec3 b, double rb, bsp_vec3 a, double ra)
+{
+    nff_check(s, fprintf(s->ctx, "c %g %g %g %g %g %g %g %g\n", b.x, b.y, b.z, rb, a.x, a.y,
+                         a.z, ra));
+}
+
+static void nf_polygon(spd_sink *s, const bsp_vec3 *v, int n)
+{
+    nff_check(s, fprintf(s->ctx, "p %d\n", n));
+    for (int i = 0; i < n; i++)
+        nff_check(s, fprintf(s->ctx, "%g %g %g\n", v[i].x, v[i].y, v[i].z));
+}
+
+static void nf_patch(spd_sink *s, const bsp_vec3 *v, const bsp_vec3 *nrm, int n)
+{
+    nff_check(s, fprintf(s->ctx, "pp %d\n", n));
+    for (int i = 0; i < n; i++)
+        nff_check(s, fprintf(s->ctx, "%g %g %g %g %g %g\n", v[i].x, v[i].y, v[i].z, nrm[i].x,
+                             nrm[i].y, nrm[i].z));
+}
+
+bsp_status spd_write_nff(const char *name, int size, FILE *out, bsp_error *err)
+{
+    if (!name || !out)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "spd: no scene name or no output");
+    const spd_entry *e = find_entry(name, strlen(name));
+    if (!e)
+        return unknown_name(err, name, strlen(name));
+    if (size == 0)
+        size = e->def;
+    if (size < e->min || size > e->max) {
+        char text[32];
+        snprintf(text, sizeof text, "%d", size);
+        return bad_size(err, e, text);
+    }
+    spd_sink sink = {.ctx = out,
+                     .failed = BSP_OK,
+                     .gen_error = NULL,
+                     .background = nf_background,
+                     .view = nf_view,
+                     .light = nf_light,
+                     .material = nf_material,
+                     .sphere = nf_sphere,
+                     .cone = nf_cone,
+                     .polygon = nf_polygon,
+                     .patch = nf_patch};
+    e->gen(size, &sink);
+    if (sink.gen_error)
+        return error_set(err, sink.failed, NULL, 0, "spd:%s:%d: %s", e->name, size,
+                         sink.gen_error);
+    if (sink.failed != BSP_OK || ferror(out))
+        return error_set(err, BSP_ERR_IO, NULL, 0, "spd:%s:%d: writing the NFF text failed",
+                         e->name, size);
+    return BSP_OK;
+}
