@@ -156,9 +156,9 @@ TEST(render_reflection_counts_by_hand)
      * rays go up and hit the sphere or nothing; the sphere has Ks = 0. */
     bsp_scene *s = shadow_scene(0.5);
     bsp_render_stats st1, st2;
-    bsp_image *d1 = render(s, 1, 1, &st1);
-    CHECK_EQ_INT(st1.cls[BSP_RAY_SECONDARY].rays, 0); /* depth 1: primary rays only */
-    bsp_image *d2 = render(s, 1, 2, &st2);
+    bsp_image *d1 = render(s, 1, 0, &st1);
+    CHECK_EQ_INT(st1.cls[BSP_RAY_SECONDARY].rays, 0); /* depth 0: primary rays only */
+    bsp_image *d2 = render(s, 1, 1, &st2);
     uint64_t sphere_pixels = 0;
     /* primary hits on the sphere are the rays whose reflected count is 0 */
     CHECK_EQ_INT(st2.cls[BSP_RAY_PRIMARY].hits, 33 * 33);
@@ -169,7 +169,7 @@ TEST(render_reflection_counts_by_hand)
     /* reflected rays go up from the floor and mostly hit the sphere's
      * underside, which faces away from the overhead light: the SPD rule casts
      * a shadow ray only from hits whose visible side faces the light, so
-     * depth 2 adds at most one shadow ray per secondary hit, and far fewer */
+     * depth 1 adds at most one shadow ray per secondary hit, and far fewer */
     uint64_t sec_hits = st2.cls[BSP_RAY_SECONDARY].hits;
     uint64_t extra = st2.cls[BSP_RAY_SHADOW].rays - st1.cls[BSP_RAY_SHADOW].rays;
     CHECK(sec_hits > 0);
@@ -213,10 +213,10 @@ TEST(render_refraction_through_glass_sphere)
     REQUIRE(bsp_scene_set_material(s, &glass, &err) == BSP_OK);
     REQUIRE(bsp_scene_add_sphere(s, bsp_v3(0, 0, 0), 1.0, &err) == BSP_OK);
     bsp_render_stats st;
-    bsp_image *img = render(s, 1, 2, &st);
+    bsp_image *img = render(s, 1, 1, &st);
     uint64_t hits = st.cls[BSP_RAY_PRIMARY].hits;
     CHECK(hits > 0 && hits < 81);
-    /* depth 2: each primary hit spawns one reflected and one refracted ray
+    /* depth 1: each primary hit spawns one reflected and one refracted ray
      * (no total internal reflection when entering) */
     CHECK_EQ_INT(st.reflected_rays, hits);
     CHECK_EQ_INT(st.refracted_rays, hits);

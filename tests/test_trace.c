@@ -411,7 +411,7 @@ TEST(cli_usage_errors)
         {"render x.nff --res", "option '--res' needs a value", 2},
         {"render x.nff --res 0", "whole number from 1 to 65536", 2},
         {"render x.nff --res 12abc", "whole number", 2},
-        {"render x.nff --depth 99", "whole number from 1 to 64", 2},
+        {"render x.nff --depth 99", "whole number from 0 to 64", 2},
         {"render x.nff --accel octree", "unknown acceleration method 'octree'", 2},
         {"render x.nff --sampling sideways", "spd or centres", 2},
         {"trace x.nff", "missing --rays", 2},

@@ -135,7 +135,9 @@ static const char render_help[] =
     "                     the protocol of Havran's tables and of 'bspray bench'\n"
     "  --sampling centres the ordinary convention: N x N pixels, one ray through each pixel\n"
     "                     centre, the view angle spanning the outer pixel edges\n"
-    "  --depth N          maximum ray depth, primary rays being depth 1 (default 4)\n"
+    "  --depth N          maximum ray depth: primary rays have depth 0 and spawn reflected\n"
+    "                     and refracted rays while below N (default 4, the paper's and\n"
+    "                     Havran's setting; the SPD Readme calls it depth 5)\n"
     "  --accel METHOD     acceleration method: naive (default), kaplan\n"
     "  --mailbox on|off   test each primitive at most once per ray (default on)\n"
     "  --threads N        worker threads (default: all cores); the image does not depend on it\n"
@@ -273,7 +275,7 @@ static int cmd_render(int argc, char **argv)
             ropts.width = w;
             ropts.height = h;
         } else if (!strcmp(s, "--depth")) {
-            ropts.max_depth = parse_int(&a, s, 1, 64);
+            ropts.max_depth = parse_int(&a, s, 0, 64);
         } else if (!strcmp(s, "--threads")) {
             ropts.threads = parse_int(&a, s, 1, 256);
         } else if (!strcmp(s, "--sampling")) {

@@ -82,7 +82,9 @@ typedef enum bsp_sampling {
 
 typedef struct bsp_render_options {
     int width, height; /* 0: from the scene's camera (see bsp_sampling) */
-    int max_depth;     /* ray tree depth: 1 = primary rays only; default 4 */
+    int max_depth;     /* secondary ray generations: primary rays have depth 0, and
+                          hits spawn reflected/refracted rays while their depth is
+                          below this; 0 = primary and shadow rays only; default 4 */
     int threads;       /* 0: all cores */
     bsp_sampling sampling;
     /* Called now and then from one thread with the share of rows done; may be NULL. */

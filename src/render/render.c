@@ -1,21 +1,30 @@
 /*
  * render.c — the Whitted ray tracer of the SPD, with ray statistics.
  *
- * Shading rules (the ones that reproduce Havran's SPD ray counts; see
- * docs/renderer.md):
- *   - every surface is hit from both sides; the normals are turned to face
- *     the incoming ray before shading;
- *   - one shadow ray goes to every point light on the visible side of the
- *     surface (dot(N, L) > 0 with the turned geometric normal);
- *   - a surface with Ks > 0 spawns a reflected ray, one with T > 0 a refracted
- *     ray (none on total internal reflection), while the ray depth is below
- *     the maximum (primary rays have depth 1);
- *   - colour: ambient + Lambert + Phong highlight per unshadowed light, plus
- *     Ks * reflected + T * refracted; a miss returns the background.
+ * Shading rules — the ones that reproduce the ray counts of Havran's SPD
+ * tables and of the SPD Readme (docs/renderer.md has the comparison):
+ *   - every surface is hit from both sides;
+ *   - a shadow ray goes to every point light on the surface's own front side:
+ *     dot(N, L) > 0 with N the outward normal (spheres, cones) or the winding
+ *     normal (polygons, patches), not turned toward the viewer. A ray that
+ *     hits a glass sphere from inside therefore casts shadow rays only to
+ *     lights outside that wall;
+ *   - a surface with Ks > 0 or T > 0 spawns a reflected ray (the SPD Readme:
+ *     every transmitter also reflects), one with T > 0 a refracted ray, none
+ *     on total internal reflection;
+ *   - ray depth counts generations: primary rays have depth 0 and a hit
+ *     spawns secondary rays while its depth is below the maximum (default 4:
+ *     the paper's and Havran's "maximal ray-recursion depth 4", the SPD
+ *     Readme's "maximum depth 5" counting the eye ray as 1);
+ *   - every primitive blocks shadow rays, transmitters too;
+ *   - colour: ambient + Lambert + Phong highlight per unshadowed light,
+ *     with normals turned to face the viewer, plus Ks * reflected +
+ *     T * refracted (a transmitter with Ks = 0 weights its reflection 0);
+ *     a miss returns the background.
  *
  * Epsilon policy: secondary and shadow rays start exactly at the hit point
  * with tmin = RAY_EPS_REL * (scene scale), directions of unit length; shadow
- * rays end RAY_EPS_REL * scale before the light.
+ * rays end RAY_EPS_REL * scale before the light (docs/precision.md).
  *
  * Threads take rows from a shared counter; every pixel depends only on its
  * own rays, so the image is identical for any thread count. Counters live in
@@ -104,7 +113,8 @@ static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, 
     bsp_vec3 p = ray_at(ray, hit->t);
     bsp_vec3 d = ray->dir;
 
-    /* Turn the normals toward the incoming ray; remember which side was hit. */
+    /* ng is the surface's own front; shading uses normals turned to the viewer */
+    bsp_vec3 front = ng;
     int entering = v3_dot(ng, d) < 0.0;
     if (!entering) {
         ng = v3_neg(ng);
@@ -121,8 +131,8 @@ static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, 
     for (size_t l = 0; l < bsp_scene_light_count(s); l++) {
         const bsp_light *light = bsp_scene_light(s, l);
         bsp_vec3 L = v3_sub(light->pos, p);
-        if (v3_dot(ng, L) <= 0.0)
-            continue; /* light behind the visible side: no shadow ray (SPD rule) */
+        if (v3_dot(front, L) <= 0.0)
+            continue; /* light behind the surface's front: no shadow ray (SPD rule) */
         if (shadowed(w, p, light->pos))
             continue;
         L = v3_normalize(L);
@@ -143,7 +153,7 @@ static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, 
     if (depth >= job->opts->max_depth)
         return;
     double cosi = -v3_dot(d, ns);
-    if (m->ks > 0.0) {
+    if (m->ks > 0.0 || m->t > 0.0) {
         bsp_ray r;
         r.org = p;
         r.dir = v3_normalize(v3_madd(d, ns, 2.0 * cosi));
@@ -200,7 +210,7 @@ static void render_rows(worker *w)
         for (int x = 0; x < width; x++) {
             bsp_ray r = camera_ray(&job->cam, x, y);
             double c[3];
-            trace(w, &r, 1, BSP_RAY_PRIMARY, c);
+            trace(w, &r, 0, BSP_RAY_PRIMARY, c);
             for (int k = 0; k < 3; k++)
                 row[3 * x + k] = (float)c[k];
         }
@@ -249,8 +259,8 @@ bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts_in,
     if (!cam)
         return error_set(err, BSP_ERR_INVALID, NULL, 0,
                          "the scene has no camera (no 'v' block)");
-    if (opts.max_depth < 1 || opts.max_depth > 64)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0, "ray depth %d is outside 1..64",
+    if (opts.max_depth < 0 || opts.max_depth > 64)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "ray depth %d is outside 0..64",
                          opts.max_depth);
     if (opts.width < 0 || opts.height < 0)
         return error_set(err, BSP_ERR_INVALID, NULL, 0, "negative image size");
