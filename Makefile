@@ -21,7 +21,7 @@ LIB_SRC  := $(sort $(wildcard src/*/*.c))
 TEST_SRC := $(sort $(wildcard tests/*.c))
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/obj/%.o)
 TEST_OBJ := $(TEST_SRC:%.c=$(BUILD)/obj/%.o)
-CLI_OBJ  := $(BUILD)/obj/tools/bspray.o
+CLI_OBJ  := $(patsubst %.c,$(BUILD)/obj/%.o,$(sort $(wildcard tools/*.c)))
 
 LIB   := $(BUILD)/libbspray.a
 CLI   := $(BUILD)/bspray

@@ -847,6 +847,7 @@ static const bad_case bad_cases[] = {
     {"negative_p_count.nff", BSP_ERR_PARSE, 1, "vertex count must be at least 1, found -3"},
     {"zero_p_count.nff", BSP_ERR_PARSE, 1, "vertex count must be at least 1, found 0"},
     {"absurd_p_count.nff", BSP_ERR_LIMIT, 1, "polygon with 2000000000 vertices"},
+    {"p_count_19_digits.nff", BSP_ERR_LIMIT, 1, "vertices"},
     {"fraction_p_count.nff", BSP_ERR_PARSE, 1, "vertex count must be a whole number, found '3.0'"},
     /* values the builder refuses */
     {"negative_material.nff", BSP_ERR_INVALID, 1, "must not be negative"},

@@ -4,6 +4,8 @@
  *   bspray render SCENE [options]   Whitted render to PNG/PPM + ray statistics
  *   bspray trace  SCENE --rays FILE batch closest-hit / occlusion queries
  *   bspray stats  SCENE             what a scene contains
+ *   bspray gen    NAME              a built-in SPD scene as NFF text
+ *   bspray bench  [SCENE...]        build, validate and time methods (bench.c)
  *
  * Exit status: 0 success, 1 bad input or failure at run time, 2 usage error.
  * Only this file prints; the library reports through bsp_error.
@@ -20,109 +22,22 @@
 #include "bspray/bspray.h"
 #include "util/progress.h"
 
-#define EXIT_INPUT 1
-#define EXIT_USAGE 2
-
-static const char *prog = "bspray";
-
-static void die_usage(const char *usage, const char *fmt, const char *arg)
-{
-    fprintf(stderr, "%s: ", prog);
-    fprintf(stderr, fmt, arg);
-    fprintf(stderr, "\nusage: %s\nTry '%s --help' for more.\n", usage, prog);
-    exit(EXIT_USAGE);
-}
-
-/* --- option parsing helpers ----------------------------------------------- */
-
-typedef struct args {
-    int argc, i;
-    char **argv;
-    const char *usage;
-} args;
-
-/* The value of option OPT (the next argument), or a usage error. */
-static const char *opt_value(args *a, const char *opt)
-{
-    if (a->i + 1 >= a->argc)
-        die_usage(a->usage, "option '%s' needs a value", opt);
-    return a->argv[++a->i];
-}
-
-static int parse_int(args *a, const char *opt, long lo, long hi)
-{
-    const char *v = opt_value(a, opt);
-    char *end;
-    errno = 0;
-    long x = strtol(v, &end, 10);
-    if (errno || end == v || *end || x < lo || x > hi) {
-        char msg[160];
-        snprintf(msg, sizeof msg, "option '%s' needs a whole number from %ld to %ld, got '%%s'",
-                 opt, lo, hi);
-        die_usage(a->usage, msg, v);
-    }
-    return (int)x;
-}
-
-static int parse_on_off(args *a, const char *opt)
-{
-    const char *v = opt_value(a, opt);
-    if (!strcmp(v, "on") || !strcmp(v, "1") || !strcmp(v, "yes"))
-        return 1;
-    if (!strcmp(v, "off") || !strcmp(v, "0") || !strcmp(v, "no"))
-        return 0;
-    die_usage(a->usage, "expected on or off, got '%s'", v);
-    return 0;
-}
-
-static int is_help(const char *s)
-{
-    return !strcmp(s, "-h") || !strcmp(s, "--help");
-}
-
-static bsp_scene *load_scene(const char *path)
-{
-    bsp_scene *scene = NULL;
-    bsp_error err;
-    if (bsp_scene_load(path, &scene, &err) != BSP_OK) {
-        fprintf(stderr, "%s: %s\n", prog, err.message);
-        exit(EXIT_INPUT);
-    }
-    for (size_t i = 0; i < bsp_scene_warning_count(scene); i++)
-        fprintf(stderr, "%s: warning: %s\n", prog, bsp_scene_warning(scene, i));
-    return scene;
-}
-
-static bsp_accel *build_accel(const bsp_scene *scene, const bsp_build_options *opts)
-{
-    bsp_accel *accel = NULL;
-    bsp_error err;
-    if (bsp_accel_build(scene, opts, &accel, &err) != BSP_OK) {
-        fprintf(stderr, "%s: %s\n", prog, err.message);
-        exit(EXIT_INPUT);
-    }
-    return accel;
-}
-
-static void parse_accel(args *a, bsp_build_options *opts)
-{
-    const char *v = opt_value(a, "--accel");
-    bsp_error err;
-    if (bsp_accel_kind_parse(v, &opts->kind, &err) != BSP_OK)
-        die_usage(a->usage, "%s", err.message);
-}
+#include "cli.h"
 
 /* --- render ------------------------------------------------------------------ */
 
 static const char render_usage[] =
     "bspray render SCENE [-o OUT.png|OUT.ppm] [--res N | --size WxH] [--depth N]\n"
     "                    [--sampling spd|centres] [--accel METHOD] [--mailbox on|off]\n"
-    "                    [--threads N] [--stats-json FILE] [--quiet]";
+    "                    [--threads N] [--stats-json FILE] [--quiet]\n"
+    "                    [--eye X,Y,Z] [--at X,Y,Z] [--up X,Y,Z] [--fov DEG]";
 
 static const char render_help[] =
     "Render SCENE with the Whitted ray tracer of the SPD and print its ray statistics.\n"
     "\n"
-    "SCENE is an NFF file (.nff or .nff.gz) or spd:NAME[:SIZE] for a built-in SPD scene.\n"
+    "SCENE is an NFF file (.nff or .nff.gz), a mesh (.obj, .ply) or spd:NAME[:SIZE] for a\n"
+    "built-in SPD scene. A mesh has no camera: it is viewed from outside its bounding box\n"
+    "along the diagonal with a 45 degree field of view and a light at the eye.\n"
     "\n"
     "  -o FILE            output image; .ppm writes binary PPM, anything else PNG\n"
     "                     (default: out.png)\n"
@@ -142,7 +57,9 @@ static const char render_help[] =
     "  --mailbox on|off   test each primitive at most once per ray (default on)\n"
     "  --threads N        worker threads (default: all cores); the image does not depend on it\n"
     "  --stats-json FILE  also write the statistics as JSON\n"
-    "  --quiet            print no statistics table\n";
+    "  --quiet            print no statistics table\n"
+    "  --eye, --at, --up X,Y,Z   override the camera (any of them; for meshes, the rest\n"
+    "                     of the default view adapts); --fov DEG its field of view\n";
 
 typedef struct progress_ctx {
     progress_bar *bar;
@@ -159,7 +76,8 @@ static double safe_div(double a, double b)
 }
 
 static void print_stats_table(FILE *f, const char *scene_name, const char *accel_name,
-                              const bsp_render_stats *st, int sampling)
+                              const bsp_render_stats *st, int sampling,
+                              const bsp_tree_stats *tree)
 {
     const bsp_ray_class_stats *P = &st->cls[BSP_RAY_PRIMARY], *S = &st->cls[BSP_RAY_SHADOW],
                               *R = &st->cls[BSP_RAY_SECONDARY];
@@ -185,6 +103,24 @@ static void print_stats_table(FILE *f, const char *scene_name, const char *accel
     fprintf(f, "| N_IT shadow | %.2f |\n", safe_div((double)S->isect_tests, (double)S->rays));
     fprintf(f, "| N_IT secondary | %.2f |\n", safe_div((double)R->isect_tests, (double)R->rays));
     fprintf(f, "| N_IT all | %.2f |\n", safe_div((double)tests, (double)all));
+    uint64_t steps = P->traversal_steps + S->traversal_steps + R->traversal_steps;
+    uint64_t ets = P->leaves_visited + S->leaves_visited + R->leaves_visited;
+    uint64_t eets = P->empty_leaves + S->empty_leaves + R->empty_leaves;
+    uint64_t mb = P->mailbox_hits + S->mailbox_hits + R->mailbox_hits;
+    if (steps) {
+        fprintf(f, "| N_TS primary | %.2f |\n",
+                safe_div((double)P->traversal_steps, (double)P->rays));
+        fprintf(f, "| N_TS all | %.2f |\n", safe_div((double)steps, (double)all));
+        fprintf(f, "| N_ETS all | %.2f |\n", safe_div((double)ets, (double)all));
+        fprintf(f, "| N_EETS all | %.2f |\n", safe_div((double)eets, (double)all));
+        fprintf(f, "| mailbox hits per ray | %.2f |\n", safe_div((double)mb, (double)all));
+    }
+    if (tree && tree->leaves) {
+        fprintf(f, "| N_IN / N_V / N_EV / N_OIV | %" PRIu64 " / %" PRIu64 " / %" PRIu64 " / %" PRIu64
+                   " |\n",
+                tree->interior_nodes, tree->leaves, tree->empty_leaves, tree->references);
+        fprintf(f, "| tree bytes | %" PRIu64 " |\n", tree->bytes);
+    }
     fprintf(f, "| T_B[s] | %.3f |\n", st->build_seconds);
     fprintf(f, "| T_TR[s] | %.3f |\n", st->render_seconds);
     fprintf(f, "| Mrays/s | %.3f |\n", safe_div((double)all, st->render_seconds) * 1e-6);
@@ -194,13 +130,14 @@ static void json_class(FILE *f, const char *name, const bsp_ray_class_stats *c, 
 {
     fprintf(f,
             "    \"%s\": {\"rays\": %" PRIu64 ", \"hits\": %" PRIu64 ", \"isect_tests\": %" PRIu64
-            ", \"traversal_steps\": %" PRIu64 ", \"N_IT\": %.6f}%s\n",
+            ", \"traversal_steps\": %" PRIu64 ", \"N_IT\": %.6f, \"N_TS\": %.6f}%s\n",
             name, c->rays, c->hits, c->isect_tests, c->traversal_steps,
-            safe_div((double)c->isect_tests, (double)c->rays), last ? "" : ",");
+            safe_div((double)c->isect_tests, (double)c->rays),
+            safe_div((double)c->traversal_steps, (double)c->rays), last ? "" : ",");
 }
 
 static int write_stats_json(const char *path, const char *scene_name, const char *accel_name,
-                            const bsp_render_stats *st)
+                            const bsp_render_stats *st, const bsp_tree_stats *tree)
 {
     FILE *f = fopen(path, "w");
     if (!f) {
@@ -233,6 +170,19 @@ static int write_stats_json(const char *path, const char *scene_name, const char
     fprintf(f, "  \"AllRays\": %" PRIu64 ",\n  \"IntersRequired\": %" PRIu64 ",\n", all,
             P->hits + S->hits + R->hits);
     fprintf(f, "  \"N_IT\": %.6f,\n", safe_div((double)tests, (double)all));
+    uint64_t steps = P->traversal_steps + S->traversal_steps + R->traversal_steps;
+    uint64_t ets = P->leaves_visited + S->leaves_visited + R->leaves_visited;
+    uint64_t eets = P->empty_leaves + S->empty_leaves + R->empty_leaves;
+    uint64_t mb = P->mailbox_hits + S->mailbox_hits + R->mailbox_hits;
+    fprintf(f, "  \"N_TS\": %.6f,\n  \"N_ETS\": %.6f,\n  \"N_EETS\": %.6f,\n",
+            safe_div((double)steps, (double)all), safe_div((double)ets, (double)all),
+            safe_div((double)eets, (double)all));
+    fprintf(f, "  \"mailbox_hits\": %" PRIu64 ",\n", mb);
+    fprintf(f,
+            "  \"N_IN\": %" PRIu64 ",\n  \"N_V\": %" PRIu64 ",\n  \"N_EV\": %" PRIu64
+            ",\n  \"N_OIV\": %" PRIu64 ",\n  \"tree_bytes\": %" PRIu64 ",\n",
+            tree->interior_nodes, tree->leaves, tree->empty_leaves, tree->references,
+            tree->bytes);
     fprintf(f, "  \"T_B\": %.6f,\n  \"T_TR\": %.6f,\n", st->build_seconds, st->render_seconds);
     fprintf(f, "  \"classes\": {\n");
     json_class(f, "primary", P, 0);
@@ -250,7 +200,10 @@ static int cmd_render(int argc, char **argv)
 {
     args a = {argc, 1, argv, render_usage};
     const char *scene_path = NULL, *out_path = "out.png", *json_path = NULL;
-    int quiet = 0;
+    int quiet = 0, view_given = 0;
+    bsp_vec3 eye, at, up;
+    int has_eye = 0, has_at = 0, has_up = 0;
+    double fov = 0;
     bsp_build_options bopts;
     bsp_build_options_defaults(&bopts);
     bsp_render_options ropts;
@@ -294,6 +247,22 @@ static int cmd_render(int argc, char **argv)
             json_path = opt_value(&a, s);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             quiet = 1;
+        } else if (!strcmp(s, "--eye")) {
+            eye = parse_vec3(&a, s);
+            has_eye = view_given = 1;
+        } else if (!strcmp(s, "--at")) {
+            at = parse_vec3(&a, s);
+            has_at = view_given = 1;
+        } else if (!strcmp(s, "--up")) {
+            up = parse_vec3(&a, s);
+            has_up = view_given = 1;
+        } else if (!strcmp(s, "--fov")) {
+            const char *v = opt_value(&a, s);
+            char *end;
+            fov = strtod(v, &end);
+            if (end == v || *end || !(fov > 0 && fov < 180))
+                die_usage(a.usage, "option '--fov' needs degrees in (0, 180), got '%s'", v);
+            view_given = 1;
         } else if (s[0] == '-' && s[1]) {
             die_usage(a.usage, "unknown option '%s'", s);
         } else if (!scene_path) {
@@ -306,6 +275,15 @@ static int cmd_render(int argc, char **argv)
         die_usage(a.usage, "%s", "missing SCENE");
 
     bsp_scene *scene = load_scene(scene_path);
+    if (view_given) {
+        bsp_error verr;
+        if (bsp_scene_set_default_view(scene, has_eye ? &eye : NULL, has_at ? &at : NULL,
+                                       has_up ? &up : NULL, fov, &verr) != BSP_OK) {
+            fprintf(stderr, "%s: %s\n", prog, verr.message);
+            bsp_scene_destroy(scene);
+            return EXIT_INPUT;
+        }
+    }
     if (!bsp_scene_camera(scene)) {
         fprintf(stderr, "%s: %s: the scene has no camera ('v' block); cannot render\n", prog,
                 scene_path);
@@ -331,9 +309,11 @@ static int cmd_render(int argc, char **argv)
             rc = EXIT_INPUT;
         }
         const char *an = bsp_accel_kind_name(bopts.kind);
+        bsp_tree_stats tree;
+        bsp_accel_tree_stats(accel, &tree);
         if (!quiet)
-            print_stats_table(stdout, scene_path, an, &st, ropts.sampling);
-        if (json_path && !write_stats_json(json_path, scene_path, an, &st))
+            print_stats_table(stdout, scene_path, an, &st, ropts.sampling, &tree);
+        if (json_path && !write_stats_json(json_path, scene_path, an, &st, &tree))
             rc = EXIT_INPUT;
         if (rc == 0 && !quiet)
             fprintf(stderr, "%s: wrote %s\n", prog, out_path);
@@ -488,20 +468,41 @@ static int cmd_trace(int argc, char **argv)
 
 /* --- stats --------------------------------------------------------------------------- */
 
-static const char stats_usage[] = "bspray stats SCENE";
+static const char stats_usage[] =
+    "bspray stats SCENE [--accel METHOD] [--max-depth N] [--leaf-size N] [--check]";
 static const char stats_help[] =
     "Print what SCENE contains: primitives by kind (with polygon vertex counts), bounds,\n"
-    "camera, lights, materials, background, and load warnings.\n";
+    "camera, lights, materials, background, and load warnings. With --accel, also build\n"
+    "that structure and print its figures with Havran's names (N_IN interior nodes, N_V\n"
+    "leaves, N_EV empty leaves, N_OIV references in leaves, leaf depths, bytes, the expected\n"
+    "SAH cost, build time T_B).\n"
+    "\n"
+    "  --accel METHOD   naive, kaplan, sah, ...\n"
+    "  --max-depth N    kd-tree depth limit (default: the method's)\n"
+    "  --leaf-size N    at most N primitives make a leaf (default: the method's)\n"
+    "  --check          run the tree invariant checker too\n";
 
 static int cmd_stats(int argc, char **argv)
 {
     args a = {argc, 1, argv, stats_usage};
     const char *scene_path = NULL;
+    int want_tree = 0, check = 0;
+    bsp_build_options bopts;
+    bsp_build_options_defaults(&bopts);
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {
             printf("usage: %s\n\n%s", stats_usage, stats_help);
             return 0;
+        } else if (!strcmp(s, "--accel")) {
+            parse_accel(&a, &bopts);
+            want_tree = 1;
+        } else if (!strcmp(s, "--max-depth")) {
+            bopts.max_depth = parse_int(&a, s, 1, BSP_KD_MAX_DEPTH_LIMIT);
+        } else if (!strcmp(s, "--leaf-size")) {
+            bopts.max_leaf_prims = parse_int(&a, s, 1, 1 << 20);
+        } else if (!strcmp(s, "--check")) {
+            check = 1;
         } else if (s[0] == '-' && s[1]) {
             die_usage(a.usage, "unknown option '%s'", s);
         } else if (!scene_path) {
@@ -579,8 +580,111 @@ static int cmd_stats(int argc, char **argv)
     double bg[3];
     bsp_scene_background(scene, bg);
     printf("background: %g %g %g\n", bg[0], bg[1], bg[2]);
+    int rc = 0;
+    if (want_tree) {
+        bsp_accel *accel = build_accel(scene, &bopts);
+        bsp_tree_stats t;
+        bsp_accel_tree_stats(accel, &t);
+        printf("structure: %s\n", bsp_accel_kind_name(bopts.kind));
+        printf("  T_B[s]         %.4f\n", bsp_accel_build_seconds(accel));
+        printf("  N_IN           %" PRIu64 "\n", t.interior_nodes);
+        printf("  N_V            %" PRIu64 "\n", t.leaves);
+        printf("  N_EV           %" PRIu64 "\n", t.empty_leaves);
+        printf("  N_OIV          %" PRIu64 "\n", t.references);
+        printf("  leaf depth     max %d, mean %.2f\n", t.max_leaf_depth, t.avg_leaf_depth);
+        printf("  bytes          %" PRIu64 "\n", t.bytes);
+        printf("  expected cost  %.3f (SAH, traversal and intersection cost 1)\n",
+               t.expected_cost);
+        if (check) {
+            bsp_error err;
+            if (bsp_accel_check(accel, &err) == BSP_OK) {
+                printf("  invariants     ok\n");
+            } else {
+                printf("  invariants     FAILED: %s\n", err.message);
+                rc = EXIT_INPUT;
+            }
+        }
+        bsp_accel_destroy(accel);
+    }
     bsp_scene_destroy(scene);
-    return 0;
+    return rc;
+}
+
+/* --- gen ------------------------------------------------------------------------------ */
+
+static const char gen_usage[] = "bspray gen NAME [-s SIZE] [-o FILE.nff]";
+
+static void print_gen_help(void)
+{
+    printf("usage: %s\n\n"
+           "Write an SPD scene, generated in code, as NFF (to standard output without -o).\n"
+           "The output equals what Haines' SPD 3.14 programs print for the same size factor.\n"
+           "\n"
+           "  -s SIZE   the SPD size factor (default: the program's default)\n"
+           "  -o FILE   output file\n"
+           "\n"
+           "NAME, with default and valid sizes:\n",
+           gen_usage);
+    char names[512];
+    snprintf(names, sizeof names, "%s", bsp_spd_scene_names());
+    for (char *tok = strtok(names, " "); tok; tok = strtok(NULL, " ")) {
+        int def, lo, hi;
+        if (bsp_spd_scene_sizes(tok, &def, &lo, &hi))
+            printf("  %-10s default %d, %d..%d\n", tok, def, lo, hi);
+    }
+    printf("\nAny SCENE argument also accepts spd:NAME[:SIZE] directly, e.g. spd:tree:11.\n");
+}
+
+static int cmd_gen(int argc, char **argv)
+{
+    args a = {argc, 1, argv, gen_usage};
+    const char *name = NULL, *out_path = NULL;
+    int size = 0;
+    for (; a.i < argc; a.i++) {
+        const char *s = argv[a.i];
+        if (is_help(s)) {
+            print_gen_help();
+            return 0;
+        } else if (!strcmp(s, "-s") || !strcmp(s, "--size")) {
+            size = parse_int(&a, s, 1, 100000);
+        } else if (!strcmp(s, "-o") || !strcmp(s, "--output")) {
+            out_path = opt_value(&a, s);
+        } else if (s[0] == '-' && s[1]) {
+            die_usage(a.usage, "unknown option '%s'", s);
+        } else if (!name) {
+            name = s;
+        } else {
+            die_usage(a.usage, "unexpected argument '%s'", s);
+        }
+    }
+    if (!name)
+        die_usage(a.usage, "%s", "missing NAME");
+    if (!strncmp(name, "spd:", 4))
+        name += 4;
+    FILE *out = out_path ? fopen(out_path, "w") : stdout;
+    if (!out) {
+        fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, out_path, strerror(errno));
+        return EXIT_INPUT;
+    }
+    bsp_error err;
+    bsp_status st = bsp_spd_write_nff(name, size, out, &err);
+    int rc = 0;
+    if (st != BSP_OK) {
+        fprintf(stderr, "%s: %s\n", prog, err.message);
+        rc = EXIT_INPUT;
+    }
+    if (out != stdout) {
+        if (fclose(out) != 0 && rc == 0) {
+            fprintf(stderr, "%s: %s: write failed: %s\n", prog, out_path, strerror(errno));
+            rc = EXIT_INPUT;
+        }
+        if (rc)
+            remove(out_path);
+    } else if (fflush(stdout) != 0 && rc == 0) {
+        fprintf(stderr, "%s: write failed: %s\n", prog, strerror(errno));
+        rc = EXIT_INPUT;
+    }
+    return rc;
 }
 
 /* --- main ----------------------------------------------------------------------------------- */
@@ -596,9 +700,12 @@ static void print_main_help(FILE *f)
             "  render   Whitted ray tracing of a scene to PNG/PPM, with ray statistics\n"
             "  trace    batch ray queries (closest hit or occlusion) from a ray file\n"
             "  stats    what a scene contains\n"
+            "  bench    build, validate and time acceleration methods (Markdown + CSV)\n"
+            "  gen      write a built-in SPD scene as NFF\n"
             "\n"
-            "SCENE is an NFF file (.nff, .nff.gz) or spd:NAME[:SIZE], a built-in SPD scene.\n",
-            BSPRAY_VERSION_STRING);
+            "SCENE is an NFF file (.nff, .nff.gz) or spd:NAME[:SIZE], a built-in SPD scene:\n"
+            "  %s\n",
+            BSPRAY_VERSION_STRING, bsp_spd_scene_names());
 }
 
 int main(int argc, char **argv)
@@ -622,6 +729,10 @@ int main(int argc, char **argv)
         return cmd_trace(argc - 1, argv + 1);
     if (!strcmp(cmd, "stats"))
         return cmd_stats(argc - 1, argv + 1);
+    if (!strcmp(cmd, "gen"))
+        return cmd_gen(argc - 1, argv + 1);
+    if (!strcmp(cmd, "bench"))
+        return cmd_bench(argc - 1, argv + 1);
     fprintf(stderr, "%s: unknown command '%s'\n", prog, cmd);
     print_main_help(stderr);
     return EXIT_USAGE;

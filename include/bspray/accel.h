@@ -27,11 +27,28 @@ typedef struct bsp_query bsp_query;
 typedef enum bsp_accel_kind {
     BSP_ACCEL_NAIVE = 0, /* test every primitive: O(N) per ray, the reference */
     BSP_ACCEL_KAPLAN,    /* kd-tree, Kaplan's rule: spatial median, axes x, y, z in turn */
+    BSP_ACCEL_SAH,       /* kd-tree, surface area heuristic (MacDonald & Booth), exact
+                            O(N log N) build with perfect splits (Wald & Havran 2006) */
     BSP_ACCEL_KIND_COUNT
 } bsp_accel_kind;
 
 /* Hard ceiling of kd-tree depth (it sizes the traversal stack). */
 #define BSP_KD_MAX_DEPTH_LIMIT 64
+
+/* Costs of the SAH cost model (MacDonald & Booth): a split costs
+ * traversal + (A_L/A) sum T_i(L) + (A_R/A) sum T_i(R), a leaf sum T_i, where
+ * T_i is the intersection cost of primitive i by its kind. Any unit (only
+ * ratios matter); bsp_calibrate_costs measures them in nanoseconds. In build
+ * options a field 0 means the default (measured on the development machine,
+ * see src/accel/kd_cost.c). */
+typedef struct bsp_sah_costs {
+    double traversal;      /* C_trav: one traversal step */
+    double sphere;         /* one ray-sphere test */
+    double triangle;       /* one ray-triangle test (also 3-vertex polygons, patches) */
+    double polygon_base;   /* a polygon with n >= 4 vertices costs */
+    double polygon_vertex; /*   polygon_base + polygon_vertex * n */
+    double cone;           /* one ray-cone (cylinder) test */
+} bsp_sah_costs;
 
 /* Build options; always start from bsp_build_options_defaults(). */
 typedef struct bsp_build_options {
@@ -41,9 +58,20 @@ typedef struct bsp_build_options {
                            method's default (kaplan: 18, the paper's value) */
     int max_leaf_prims; /* kd-trees: a node with at most this many primitives becomes a
                            leaf; 0: the method's default (kaplan: 2, the paper's value) */
+                        /* sah: max_depth 0 means round(8 + 1.3 log2 N), max_leaf_prims 0
+                           means 1 (the cost decides); the paper's setting is 18 and 2 */
+    bsp_sah_costs sah_costs; /* sah: cost model; 0 fields take the defaults */
+    double sah_empty_bonus;  /* sah: a split with one empty side costs (1 - bonus) times
+                                its cost; 0: the default (0.2), negative: no bonus */
 } bsp_build_options;
 
 void bsp_build_options_defaults(bsp_build_options *opts);
+
+/* Measures on this machine, on synthetic random rays, the time in ns of one
+ * ray-primitive test per kind (polygons as polygon_base + polygon_vertex * n,
+ * fitted over several vertex counts) and of one kd-tree traversal step.
+ * Takes about a second; results vary by a few percent between runs. */
+bsp_status bsp_calibrate_costs(bsp_sah_costs *ns_out, bsp_error *err);
 
 /* "naive", ...; NULL for an unknown kind. */
 const char *bsp_accel_kind_name(bsp_accel_kind kind);

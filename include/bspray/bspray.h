@@ -15,5 +15,6 @@
 #include "bspray/scene.h"
 #include "bspray/accel.h"
 #include "bspray/render.h"
+#include "bspray/spd.h"
 
 #endif /* BSPRAY_BSPRAY_H */

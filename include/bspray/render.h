@@ -90,6 +90,11 @@ typedef struct bsp_render_options {
     /* Called now and then from one thread with the share of rows done; may be NULL. */
     void (*progress)(double done, void *ctx);
     void *progress_ctx;
+    /* Called for every ray cast, with its class, before it is shot; may be
+     * NULL. Called from the render threads at once: with threads > 1 it must
+     * be thread-safe. (bench records a render's rays this way.) */
+    void (*ray_log)(bsp_ray_class cls, const bsp_ray *ray, void *ctx);
+    void *ray_log_ctx;
 } bsp_render_options;
 
 void bsp_render_options_defaults(bsp_render_options *opts);

@@ -98,6 +98,17 @@ bsp_status bsp_scene_add_light(bsp_scene *scene, const bsp_light *light,
  * or a non-positive resolution are BSP_ERR_INVALID). */
 bsp_status bsp_scene_set_camera(bsp_scene *scene, const bsp_camera *cam,
                          bsp_error *err);
+/* Sets a camera that frames the scene (the default view of OBJ and PLY
+ * meshes; see docs/formats.md). Every argument may be NULL (or 0) for its
+ * default: AT the centre of the bounding box; EYE from AT along (1,1,1) far
+ * enough that the box's bounding sphere fits in the view cone; UP +z, or +y
+ * when the view is parallel to z; FOV_DEG 45. The resolution of an existing
+ * camera is kept, else 512 x 512. A scene without lights gets one white point
+ * light at the eye; a light that sat at the previous eye moves with it.
+ * An empty scene is framed as a unit sphere at the origin. */
+bsp_status bsp_scene_set_default_view(bsp_scene *scene, const bsp_vec3 *eye_or_null,
+                                      const bsp_vec3 *at_or_null, const bsp_vec3 *up_or_null,
+                                      double fov_deg_or_0, bsp_error *err);
 void bsp_scene_set_background(bsp_scene *scene, const double rgb[3]);
 
 /* --- Reading ------------------------------------------------------------- */

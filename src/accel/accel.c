@@ -6,9 +6,10 @@
 #include <string.h>
 #include <time.h>
 
+#include "accel/kd_cost.h"
 #include "accel/kd_tree.h"
 
-static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {"naive", "kaplan"};
+static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {"naive", "kaplan", "sah"};
 
 double accel_now(void)
 {
@@ -22,6 +23,8 @@ void bsp_build_options_defaults(bsp_build_options *opts)
     memset(opts, 0, sizeof *opts);
     opts->kind = BSP_ACCEL_NAIVE;
     opts->mailbox = 1;
+    kd_cost_defaults(&opts->sah_costs);
+    opts->sah_empty_bonus = KD_DEFAULT_EMPTY_BONUS;
 }
 
 const char *bsp_accel_kind_name(bsp_accel_kind kind)
@@ -66,6 +69,7 @@ bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts
         st = naive_build(a, err);
         break;
     case BSP_ACCEL_KAPLAN:
+    case BSP_ACCEL_SAH:
         st = kd_accel_build(a, err);
         break;
     default:

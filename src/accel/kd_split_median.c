@@ -57,13 +57,13 @@ static bsp_status build_node(median_build *b, uint32_t node, bsp_box box, size_t
     size_t left = top, nl = 0;
     for (size_t k = 0; k < n; k++) {
         uint32_t p = b->scratch[base + k];
-        if (b->pbox[p].lo.v[axis] <= s)
+        if (b->pbox[p].lo.v[axis] < s)
             b->scratch[left + nl++] = p;
     }
     size_t right = left + nl, nr = 0;
     for (size_t k = 0; k < n; k++) {
         uint32_t p = b->scratch[base + k];
-        if (b->pbox[p].hi.v[axis] >= s)
+        if (b->pbox[p].hi.v[axis] > s)
             b->scratch[right + nr++] = p;
     }
     uint32_t child = kd_alloc_pair(t);

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "accel/kd_clip.h"
 #include "accel/kd_tree.h"
 #include "geom/vec.h"
 
@@ -156,16 +157,32 @@ typedef struct check_walk {
     uint32_t *lists;  /* scratch: primitive lists of the nodes on the path */
     size_t cap, top;
     char *seen;       /* per primitive: listed in the current leaf */
+    kd_clip_scratch clip;
     bsp_error *err;
     bsp_status st;
 } check_walk;
 
+/* Open overlap: padded bounds that merely touch a cell need not be listed
+ * there (see the invariant in kd_tree.h). */
 static int boxes_overlap(bsp_box a, bsp_box b)
 {
     for (int k = 0; k < 3; k++)
-        if (a.lo.v[k] > b.hi.v[k] || b.lo.v[k] > a.hi.v[k])
+        if (!(a.lo.v[k] < b.hi.v[k] && b.lo.v[k] < a.hi.v[k]))
             return 0;
     return 1;
+}
+
+/* Whether primitive P must be listed in the leaves of CELL where it is: its
+ * bounds clipped to CELL (kd_clip.h; KD_CHECK_PAD_FRACTION of the padding)
+ * overlap CELL. Builders that clip (sah) list a primitive only where its
+ * clipped bounds reach, so unclipped bounds would reject their trees. */
+static int clipped_overlap(check_walk *w, uint32_t p, bsp_box cell)
+{
+    bsp_box cl;
+    int r = kd_clip_prim(w->scene, p, &cell, w->t->pad * KD_CHECK_PAD_FRACTION, &w->clip, &cl);
+    if (r < 0 && w->st == BSP_OK)
+        w->st = error_set(w->err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    return r != 0 && (r < 0 || boxes_overlap(cl, cell));
 }
 
 static int check_fail(check_walk *w, const char *fmt, uint32_t a, uint32_t b)
@@ -229,7 +246,7 @@ static int check_node(check_walk *w, uint32_t i, bsp_box box, size_t list, size_
         size_t m = 0;
         for (size_t k = 0; k < n; k++) {
             uint32_t p = w->lists[list + k];
-            if (boxes_overlap(w->pbox[p], cb))
+            if (boxes_overlap(w->pbox[p], cb) && clipped_overlap(w, p, cb))
                 w->lists[base + m++] = p;
         }
         w->top = base + m;
@@ -244,7 +261,7 @@ static int check_node(check_walk *w, uint32_t i, bsp_box box, size_t list, size_
 bsp_status kd_tree_check(const kd_tree *t, const bsp_scene *scene, bsp_error *err)
 {
     size_t np = bsp_scene_prim_count(scene);
-    check_walk w = {t, scene, NULL, NULL, 0, 0, NULL, err, BSP_OK};
+    check_walk w = {t, scene, NULL, NULL, 0, 0, NULL, {{NULL, NULL}, {0, 0}}, err, BSP_OK};
     w.pbox = malloc((np ? np : 1) * sizeof *w.pbox);
     w.seen = calloc(np ? np : 1, 1);
     w.cap = 2 * np + 16;
@@ -269,6 +286,7 @@ bsp_status kd_tree_check(const kd_tree *t, const bsp_scene *scene, bsp_error *er
         w.st = error_set(err, BSP_ERR_INVALID, NULL, 0, "kd-tree: empty root box");
     else
         check_node(&w, 0, t->box, 0, n, 0);
+    kd_clip_scratch_free(&w.clip);
     free(w.pbox);
     free(w.seen);
     free(w.lists);
@@ -288,6 +306,8 @@ static const accel_ops kd_ops = {kd_intersect, kd_occluded, kd_destroy};
 bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
 {
     bsp_build_options *o = &a->opts;
+    if (o->kind == BSP_ACCEL_SAH)
+        kd_sah_default_limits(o, a->scene);
     if (o->max_depth == 0)
         o->max_depth = 18;
     if (o->max_leaf_prims == 0)
@@ -309,6 +329,9 @@ bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
     switch (o->kind) {
     case BSP_ACCEL_KAPLAN:
         st = kd_build_median(t, a->scene, err);
+        break;
+    case BSP_ACCEL_SAH:
+        st = kd_build_sah(t, a->scene, o, err);
         break;
     default:
         st = error_set(err, BSP_ERR_INVALID, NULL, 0, "not a kd-tree rule");

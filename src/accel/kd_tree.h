@@ -9,12 +9,15 @@
  * primitives are a run in one shared index array.
  *
  * Conservative assignment invariant (what exactness rests on): a primitive
- * is listed in every leaf whose closed box its bounds, padded by `pad`,
- * overlap. The padding (KD_PAD_REL times the scene scale) is far larger than
- * the rounding error of any computed hit point or t, so a traversal that
- * tests the primitives of every leaf the ray's segment passes through, and
- * stops only once the closest hit lies inside the current cell, returns what
- * the naive method returns.
+ * is listed in every leaf whose box overlaps the interior of its bounds
+ * padded by `pad` (lo < cell.hi and hi > cell.lo on every axis). A primitive
+ * lies at least `pad` inside its padded bounds, so it is listed in every
+ * leaf whose closed box it touches — in both children when it lies in a
+ * splitting plane — and the padding (KD_PAD_REL times the scene scale) is far
+ * larger than the rounding error of any computed hit point or t. So a
+ * traversal that tests the primitives of every leaf the ray's segment passes
+ * through, and stops only once the closest hit lies inside the current cell,
+ * returns what the naive method returns, ties included.
  */
 #ifndef BSPRAY_ACCEL_KD_TREE_H
 #define BSPRAY_ACCEL_KD_TREE_H
@@ -90,6 +93,13 @@ HIDDEN bsp_box kd_prim_box(const kd_tree *t, const bsp_scene *scene, uint32_t pr
 
 /* Kaplan's rule: spatial median, axes in turn. Fills T (already set up). */
 HIDDEN bsp_status kd_build_median(kd_tree *t, const bsp_scene *scene, bsp_error *err);
+/* Surface area heuristic, exact O(N log N) event build with perfect splits
+ * (kd_split_sah.c). Fills T (already set up) with the costs of O. */
+HIDDEN bsp_status kd_build_sah(kd_tree *t, const bsp_scene *scene, const bsp_build_options *o,
+                               bsp_error *err);
+/* Replaces 0 limits of O by the SAH defaults for SCENE: max_depth
+ * round(8 + 1.3 log2 N) (at most BSP_KD_MAX_DEPTH_LIMIT), max_leaf_prims 1. */
+HIDDEN void kd_sah_default_limits(bsp_build_options *o, const bsp_scene *scene);
 
 /* --- used by the accel front end --------------------------------------------- */
 

@@ -93,6 +93,8 @@ static int shadowed(worker *w, bsp_vec3 p, bsp_vec3 light)
     r.tmax = dist - w->job->eps;
     if (!(r.tmax > r.tmin))
         return 0; /* the light sits on the surface */
+    if (w->job->opts->ray_log)
+        w->job->opts->ray_log(BSP_RAY_SHADOW, &r, w->job->opts->ray_log_ctx);
     bsp_query_counters before = w->query->counters;
     int blocked = bsp_occluded(w->job->accel, w->query, &r);
     account(w, BSP_RAY_SHADOW, &before);
@@ -186,6 +188,8 @@ static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, 
 static void trace(worker *w, const bsp_ray *ray, int depth, bsp_ray_class cls, double out[3])
 {
     bsp_hit hit;
+    if (w->job->opts->ray_log)
+        w->job->opts->ray_log(cls, ray, w->job->opts->ray_log_ctx);
     bsp_query_counters before = w->query->counters;
     int found = bsp_intersect(w->job->accel, w->query, ray, &hit);
     account(w, cls, &before);

@@ -1,12 +1,30 @@
 /*
  * load.c — bsp_scene_load: one entry point for every kind of scene a user
- * names. "spd:NAME[:SIZE]" is generated in code (src/spd); anything else is
- * read as NFF (plain or gzip, detected by content).
+ * names. "spd:NAME[:SIZE]" is generated in code (src/spd); a name ending in
+ * ".obj" or ".ply" (any case) is read as a Wavefront OBJ or PLY mesh
+ * (src/scene/obj.c, ply.c); anything else is read as NFF (plain or gzip,
+ * detected by content).
  */
 #include <string.h>
 
 #include "scene/scene_internal.h"
 #include "spd/spd.h"
+
+/* True when PATH ends with EXT (a lower-case ".xyz"), ignoring case. */
+static int has_extension(const char *path, const char *ext)
+{
+    size_t n = strlen(path), m = strlen(ext);
+    if (n <= m)
+        return 0;
+    for (size_t i = 0; i < m; i++) {
+        char c = path[n - m + i];
+        if (c >= 'A' && c <= 'Z')
+            c = (char)(c - 'A' + 'a');
+        if (c != ext[i])
+            return 0;
+    }
+    return 1;
+}
 
 bsp_status bsp_scene_load(const char *path, bsp_scene **out, bsp_error *err)
 {
@@ -14,5 +32,9 @@ bsp_status bsp_scene_load(const char *path, bsp_scene **out, bsp_error *err)
         *out = NULL;
     if (path && strncmp(path, "spd:", 4) == 0)
         return spd_scene_generate_spec(path, out, err);
+    if (path && has_extension(path, ".obj"))
+        return obj_load_file(path, out, err);
+    if (path && has_extension(path, ".ply"))
+        return ply_load_file(path, out, err);
     return nff_load_file(path, out, err);
 }

@@ -365,12 +365,13 @@ static int parse_integer(const token *t, long long *out)
     }
     if (i == len)
         return 0;
+    /* saturates at 10^18: every caller treats that as absurd */
+    const long long cap = 1000000000000000000LL;
     long long v = 0;
     for (; i < len; i++) {
         if (!is_digit(s[i]))
             return 0;
-        if (v < 1000000000000000000LL)
-            v = v * 10 + (s[i] - '0');
+        v = v <= (cap - 9) / 10 ? v * 10 + (s[i] - '0') : cap;
     }
     *out = neg ? -v : v;
     return 1;

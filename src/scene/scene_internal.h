@@ -126,6 +126,8 @@ HIDDEN double scene_scale(const bsp_scene *s);
 
 /* Reads an NFF file (plain or gzip): bsp_scene_load without the dispatch. */
 HIDDEN bsp_status nff_load_file(const char *path, bsp_scene **out, bsp_error *err);
+HIDDEN bsp_status obj_load_file(const char *path, bsp_scene **out, bsp_error *err);
+HIDDEN bsp_status ply_load_file(const char *path, bsp_scene **out, bsp_error *err);
 
 /* Intersection dispatch used by every accelerator (inline for speed): the t
  * computed never depends on ray->tmin / ray->tmax, which only filter. */

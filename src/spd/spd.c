@@ -3,6 +3,9 @@
  * builds a bsp_scene through the public add_* calls, one prints NFF text the
  * way the SPD programs do) and the entry points declared in spd.h.
  */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 
@@ -59,7 +62,7 @@ static const spd_entry *find_entry(const char *name, size_t len)
     return NULL;
 }
 
-const char *spd_scene_names(void)
+const char *bsp_spd_scene_names(void)
 {
     static char names[256];
     if (!names[0]) {
@@ -75,7 +78,7 @@ const char *spd_scene_names(void)
     return names;
 }
 
-int spd_scene_sizes(const char *name, int *def, int *min, int *max)
+int bsp_spd_scene_sizes(const char *name, int *def, int *min, int *max)
 {
     const spd_entry *e = name ? find_entry(name, strlen(name)) : NULL;
     if (!e)
@@ -93,7 +96,7 @@ static bsp_status unknown_name(bsp_error *err, const char *name, size_t len)
 {
     return error_set(err, BSP_ERR_INVALID, NULL, 0,
                      "unknown SPD scene '%.*s' (known scenes: %s)", (int)(len > 64 ? 64 : len),
-                     name, spd_scene_names());
+                     name, bsp_spd_scene_names());
 }
 
 static bsp_status bad_size(bsp_error *err, const spd_entry *e, const char *size_text)
@@ -126,6 +129,55 @@ static int parse_size(const char *text, int *size)
 
 /* --- the scene sink -------------------------------------------------------- */
 
+/* The double that strtod returns for printf("%g", x): x rounded to six
+ * significant digits, then correctly rounded back to binary. The scene sink
+ * passes every number through it, so that spd:NAME is exactly the scene its
+ * SPD file describes (and renders with the very same rays). The fast path
+ * scales by an exact power of ten in long double and rounds; near a decimal
+ * tie, or out of the exact range, it asks snprintf/strtod themselves. */
+static double round_g6(double x)
+{
+    if (x == 0.0 || !isfinite(x))
+        return x;
+    double ax = fabs(x);
+    int e = (int)floor(log10(ax));
+    for (int attempt = 0; attempt < 2; attempt++) {
+        int k = 5 - e; /* the six digits are ax * 10^k, in [99999.5, 999999.5) */
+        if (k < -22 || k > 22)
+            break;
+        long double p10 = 1.0L;
+        for (int i = 0; i < (k < 0 ? -k : k); i++)
+            p10 *= 10.0L; /* exact: 10^22 needs 52 bits of mantissa */
+        long double scaled = k >= 0 ? (long double)ax * p10 : (long double)ax / p10;
+        if (scaled >= 999999.5L) {
+            e++;
+            continue;
+        }
+        if (scaled < 99999.5L) {
+            e--;
+            continue;
+        }
+        long double frac = scaled - floorl(scaled);
+        if (fabsl(frac - 0.5L) < 1e-6L)
+            break; /* too close to a tie to trust */
+        double m = (double)(frac < 0.5L ? floorl(scaled) : floorl(scaled) + 1.0L);
+        double p = (double)p10; /* exact */
+        double r = k >= 0 ? m / p : m * p; /* one correctly rounded operation */
+        return copysign(r, x);
+    }
+    char buf[64];
+    snprintf(buf, sizeof buf, "%g", x);
+    return strtod(buf, NULL);
+}
+
+static bsp_vec3 round_v(bsp_vec3 v)
+{
+    return bsp_v3(round_g6(v.x), round_g6(v.y), round_g6(v.z));
+}
+
+/* Polygons can be large; rounded copies go through this buffer. */
+#define SINK_MAX_VERTS 4096
+
 typedef struct scene_ctx {
     bsp_scene *scene;
     bsp_error *err;
@@ -140,7 +192,8 @@ static void scene_check(spd_sink *s, bsp_status st)
 
 static void sc_background(spd_sink *s, const double rgb[3])
 {
-    bsp_scene_set_background(((scene_ctx *)s->ctx)->scene, rgb);
+    double r[3] = {round_g6(rgb[0]), round_g6(rgb[1]), round_g6(rgb[2])};
+    bsp_scene_set_background(((scene_ctx *)s->ctx)->scene, r);
 }
 
 static void sc_view(spd_sink *s, bsp_vec3 from, bsp_vec3 at, bsp_vec3 up, double angle,
@@ -148,11 +201,11 @@ static void sc_view(spd_sink *s, bsp_vec3 from, bsp_vec3 at, bsp_vec3 up, double
 {
     scene_ctx *c = s->ctx;
     bsp_camera cam;
-    cam.from = from;
-    cam.at = at;
-    cam.up = up;
-    cam.angle_deg = angle;
-    cam.hither = hither;
+    cam.from = round_v(from);
+    cam.at = round_v(at);
+    cam.up = round_v(up);
+    cam.angle_deg = round_g6(angle);
+    cam.hither = round_g6(hither);
     cam.res_x = resx;
     cam.res_y = resy;
     scene_check(s, bsp_scene_set_camera(c->scene, &cam, c->err));
@@ -162,7 +215,7 @@ static void sc_light(spd_sink *s, bsp_vec3 pos)
 {
     scene_ctx *c = s->ctx;
     bsp_light l;
-    l.pos = pos;
+    l.pos = round_v(pos);
     l.color[0] = l.color[1] = l.color[2] = 1.0;
     l.has_color = 0;
     scene_check(s, bsp_scene_add_light(c->scene, &l, c->err));
@@ -173,39 +226,56 @@ static void sc_material(spd_sink *s, const double rgb[3], double kd, double ks, 
 {
     scene_ctx *c = s->ctx;
     bsp_material m;
-    m.color[0] = rgb[0];
-    m.color[1] = rgb[1];
-    m.color[2] = rgb[2];
-    m.kd = kd;
-    m.ks = ks;
-    m.shine = shine;
-    m.t = t;
-    m.ior = ior;
+    m.color[0] = round_g6(rgb[0]);
+    m.color[1] = round_g6(rgb[1]);
+    m.color[2] = round_g6(rgb[2]);
+    m.kd = round_g6(kd);
+    m.ks = round_g6(ks);
+    m.shine = round_g6(shine);
+    m.t = round_g6(t);
+    m.ior = round_g6(ior);
     scene_check(s, bsp_scene_set_material(c->scene, &m, c->err));
 }
 
 static void sc_sphere(spd_sink *s, bsp_vec3 center, double radius)
 {
     scene_ctx *c = s->ctx;
-    scene_check(s, bsp_scene_add_sphere(c->scene, center, radius, c->err));
+    scene_check(s, bsp_scene_add_sphere(c->scene, round_v(center), round_g6(radius), c->err));
 }
 
 static void sc_cone(spd_sink *s, bsp_vec3 base, double rb, bsp_vec3 apex, double ra)
 {
     scene_ctx *c = s->ctx;
-    scene_check(s, bsp_scene_add_cone(c->scene, base, rb, apex, ra, c->err));
+    scene_check(s, bsp_scene_add_cone(c->scene, round_v(base), round_g6(rb), round_v(apex),
+                                      round_g6(ra), c->err));
 }
 
 static void sc_polygon(spd_sink *s, const bsp_vec3 *v, int n)
 {
     scene_ctx *c = s->ctx;
-    scene_check(s, bsp_scene_add_polygon(c->scene, v, (size_t)n, c->err));
+    bsp_vec3 r[SINK_MAX_VERTS];
+    if (n > SINK_MAX_VERTS || n < 0) {
+        scene_check(s, error_set(c->err, BSP_ERR_LIMIT, NULL, 0, "polygon with %d vertices", n));
+        return;
+    }
+    for (int i = 0; i < n; i++)
+        r[i] = round_v(v[i]);
+    scene_check(s, bsp_scene_add_polygon(c->scene, r, (size_t)n, c->err));
 }
 
 static void sc_patch(spd_sink *s, const bsp_vec3 *v, const bsp_vec3 *nrm, int n)
 {
     scene_ctx *c = s->ctx;
-    scene_check(s, bsp_scene_add_patch(c->scene, v, nrm, (size_t)n, c->err));
+    bsp_vec3 r[SINK_MAX_VERTS], rn[SINK_MAX_VERTS];
+    if (n > SINK_MAX_VERTS || n < 0) {
+        scene_check(s, error_set(c->err, BSP_ERR_LIMIT, NULL, 0, "patch with %d vertices", n));
+        return;
+    }
+    for (int i = 0; i < n; i++) {
+        r[i] = round_v(v[i]);
+        rn[i] = round_v(nrm[i]);
+    }
+    scene_check(s, bsp_scene_add_patch(c->scene, r, rn, (size_t)n, c->err));
 }
 
 bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error *err)
@@ -218,7 +288,7 @@ bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error 
         return error_set(err, BSP_ERR_INVALID, NULL, 0,
                          "'%.64s' is not an SPD scene (expected spd:NAME or spd:NAME:SIZE; "
                          "known scenes: %s)",
-                         spec, spd_scene_names());
+                         spec, bsp_spd_scene_names());
     const char *name = spec + 4;
     const char *colon = strchr(name, ':');
     size_t len = colon ? (size_t)(colon - name) : strlen(name);
@@ -318,7 +388,7 @@ static void nf_patch(spd_sink *s, const bsp_vec3 *v, const bsp_vec3 *nrm, int n)
                              nrm[i].y, nrm[i].z));
 }
 
-bsp_status spd_write_nff(const char *name, int size, FILE *out, bsp_error *err)
+bsp_status bsp_spd_write_nff(const char *name, int size, FILE *out, bsp_error *err)
 {
     if (!name || !out)
         return error_set(err, BSP_ERR_INVALID, NULL, 0, "spd: no scene name or no output");

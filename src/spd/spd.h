@@ -17,6 +17,7 @@
 
 #include "bspray/error.h"
 #include "bspray/geom.h"
+#include "bspray/spd.h"
 #include "bspray/scene.h"
 
 #define SPD_HIDDEN __attribute__((visibility("hidden")))
@@ -165,18 +166,7 @@ SPD_HIDDEN void spd_gen_nurbtst(int size, spd_sink *out);
  * without regard to case). An unknown name or a size outside the scene's
  * range is BSP_ERR_INVALID with a message naming the known scenes or the
  * valid range. On success *OUT owns a new scene; on failure it is NULL. */
-bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error *err);
-
-/* Writes the NFF text of scene NAME at size factor SIZE (0: the scene's
- * default) to OUT, formatted as the SPD programs print it. */
-bsp_status spd_write_nff(const char *name, int size, FILE *out, bsp_error *err);
-
-/* The known scene names, in priority order, separated by single spaces
- * (a static string, for --help). */
-const char *spd_scene_names(void);
-
-/* Default, smallest and largest size factor of scene NAME; returns 0 when the
- * name is unknown. Any pointer may be NULL. */
-int spd_scene_sizes(const char *name, int *def, int *min, int *max);
+SPD_HIDDEN bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out,
+                                              bsp_error *err);
 
 #endif /* BSPRAY_SPD_H */

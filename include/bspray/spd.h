@@ -1,0 +1,25 @@
+/*
+ * bspray/spd.h — Eric Haines' Standard Procedural Databases, generated in
+ * code. Every scene that bsp_scene_load accepts as "spd:NAME[:SIZE]" can also
+ * be written out as NFF text, formatted as the SPD programs print it.
+ */
+#ifndef BSPRAY_SPD_API_H
+#define BSPRAY_SPD_API_H
+
+#include <stdio.h>
+
+#include "bspray/error.h"
+
+/* Writes the NFF text of scene NAME at size factor SIZE (0: the scene's
+ * default) to OUT. An unknown name or a size outside the scene's range is
+ * BSP_ERR_INVALID; a failed write BSP_ERR_IO. */
+bsp_status bsp_spd_write_nff(const char *name, int size, FILE *out, bsp_error *err);
+
+/* The known scene names separated by single spaces (a static string). */
+const char *bsp_spd_scene_names(void);
+
+/* Default, smallest and largest size factor of scene NAME; returns 0 when the
+ * name is unknown. Any pointer may be NULL. */
+int bsp_spd_scene_sizes(const char *name, int *def, int *min, int *max);
+
+#endif /* BSPRAY_SPD_API_H */

@@ -1,0 +1,225 @@
+/*
+ * kd_clip.c — split-clipped bounds of a primitive against a box (contract in
+ * kd_clip.h): Sutherland–Hodgman for triangles and polygons, the ball ∩ box
+ * for spheres, bounds ∩ box for cones.
+ *
+ * Rounding: a clipped vertex gets the plane's coordinate exactly and its
+ * other coordinates by interpolation, each within a few ulps of the true
+ * point; the final padding (PAD, about 1e-7 of the scene scale) swallows
+ * that, and the result is clamped to the exact unclipped bounds and to the
+ * clipping box, which both contain the true part. A concave polygon may leave
+ * zero-width "bridges" along a clipping plane; their vertices lie inside the
+ * bounds of the part already clipped, so the result can only be larger than
+ * the true bounds, never smaller.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+
+#include "accel/kd_clip.h"
+#include "geom/vec.h"
+
+/* NaN-free minimum and maximum (no libm call) */
+static inline double dmin(double a, double b)
+{
+    return a < b ? a : b;
+}
+static inline double dmax(double a, double b)
+{
+    return a > b ? a : b;
+}
+
+void kd_clip_scratch_free(kd_clip_scratch *scr)
+{
+    if (!scr)
+        return;
+    for (int i = 0; i < 2; i++) {
+        free(scr->buf[i]);
+        scr->buf[i] = NULL;
+        scr->cap[i] = 0;
+    }
+}
+
+/* Clips the closed polygon IN[0..N) to x[k] >= c (ABOVE) or x[k] <= c;
+ * writes at most 2N vertices to OUT and returns their count. */
+static size_t clip_plane(const bsp_vec3 *in, size_t n, bsp_vec3 *out, int k, double c, int above)
+{
+    size_t m = 0;
+    bsp_vec3 a = in[n - 1];
+    double da = above ? a.v[k] - c : c - a.v[k];
+    for (size_t i = 0; i < n; i++) {
+        bsp_vec3 b = in[i];
+        double db = above ? b.v[k] - c : c - b.v[k];
+        if ((da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0)) {
+            double t = da / (da - db); /* in [0, 1] up to rounding */
+            bsp_vec3 p = v3_madd(a, v3_sub(b, a), t);
+            p.v[k] = c;
+            out[m++] = p;
+        }
+        if (db >= 0.0)
+            out[m++] = b;
+        a = b;
+        da = db;
+    }
+    return m;
+}
+
+#define STACK_VERTS 32
+
+/* Bounds of polygon VS[0..N) ∩ G into *B (PB: its unclipped bounds). Each
+ * plane at most doubles the vertex count (an output vertex is an input
+ * vertex or a crossing edge), so the output buffer is grown to 2N first; it
+ * never holds the current polygon, which lives in the other one. */
+static int clip_polygon(const bsp_vec3 *vs, size_t n, bsp_box pb, const bsp_box *g,
+                        kd_clip_scratch *scr, bsp_box *b)
+{
+    bsp_vec3 stk[2][STACK_VERTS];
+    bsp_vec3 *buf[2] = {stk[0], stk[1]};
+    size_t cap[2] = {STACK_VERTS, STACK_VERTS};
+    kd_clip_scratch local = {{NULL, NULL}, {0, 0}};
+    kd_clip_scratch *s = scr ? scr : &local;
+    const bsp_vec3 *cur = vs;
+    int o = 0, result = 1;
+    for (int plane = 0; plane < 6 && n > 0; plane++) {
+        int k = plane >> 1, above = !(plane & 1);
+        double c = above ? g->lo.v[k] : g->hi.v[k];
+        if (above ? !(pb.lo.v[k] < c) : !(pb.hi.v[k] > c))
+            continue; /* the polygon lies on the kept side of this plane */
+        if (2 * n > cap[o]) {
+            if (2 * n > s->cap[o]) {
+                size_t ncap = s->cap[o] * 2 > 2 * n ? s->cap[o] * 2 : 2 * n;
+                bsp_vec3 *nb = realloc(s->buf[o], ncap * sizeof *nb);
+                if (!nb) {
+                    result = -1;
+                    break;
+                }
+                s->buf[o] = nb;
+                s->cap[o] = ncap;
+            }
+            buf[o] = s->buf[o];
+            cap[o] = s->cap[o];
+        }
+        n = clip_plane(cur, n, buf[o], k, c, above);
+        cur = buf[o];
+        o ^= 1;
+    }
+    if (result == 1) {
+        if (n == 0) {
+            result = 0;
+        } else {
+            bsp_box r = box_empty();
+            for (size_t i = 0; i < n; i++)
+                r = box_add_point(r, cur[i]);
+            *b = r;
+        }
+    }
+    if (!scr)
+        kd_clip_scratch_free(&local);
+    return result;
+}
+
+/* Bounds of the sphere's surface ∩ G (through the ball ∩ G, exact per
+ * axis); 0 when the ball misses G or G lies inside the sphere. */
+static int clip_sphere(const sphere_shape *s, const bsp_box *g, bsp_box *b)
+{
+    const double slack = 16.0 * DBL_EPSILON;
+    double r2 = s->radius2, gap[3], d2min = 0.0, d2max = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double c = s->center.v[k], lo = g->lo.v[k], hi = g->hi.v[k];
+        gap[k] = c < lo ? lo - c : (c > hi ? c - hi : 0.0);
+        double far = dmax(fabs(c - lo), fabs(hi - c));
+        d2min += gap[k] * gap[k];
+        d2max += far * far;
+    }
+    if (d2min > r2 * (1.0 + slack))
+        return 0; /* the ball misses G */
+    if (d2max < r2 * (1.0 - slack))
+        return 0; /* G lies inside the ball: the surface misses it */
+    for (int k = 0; k < 3; k++) {
+        double c = s->center.v[k];
+        double d2o = 0.0; /* squared distance to G across the other two axes */
+        for (int j = 0; j < 3; j++)
+            if (j != k)
+                d2o += gap[j] * gap[j];
+        double arg = r2 - d2o;
+        double ext = sqrt(dmax(arg, 0.0) + slack * (r2 + d2o)); /* never below the truth */
+        ext = dmin(ext, s->radius);
+        b->lo.v[k] = dmax(c - ext, g->lo.v[k]);
+        b->hi.v[k] = dmin(c + ext, g->hi.v[k]);
+        if (b->lo.v[k] > b->hi.v[k]) {
+            b->lo.v[k] = dmax(c - s->radius, g->lo.v[k]);
+            b->hi.v[k] = dmin(c + s->radius, g->hi.v[k]);
+        }
+    }
+    return 1;
+}
+
+static int box_inside(bsp_box a, const bsp_box *g)
+{
+    for (int k = 0; k < 3; k++)
+        if (!(a.lo.v[k] >= g->lo.v[k] && a.hi.v[k] <= g->hi.v[k]))
+            return 0;
+    return 1;
+}
+
+static int box_meets(bsp_box a, const bsp_box *g)
+{
+    for (int k = 0; k < 3; k++)
+        if (a.lo.v[k] > g->hi.v[k] || a.hi.v[k] < g->lo.v[k])
+            return 0;
+    return 1;
+}
+
+int kd_clip_prim(const bsp_scene *scene, uint32_t prim, const bsp_box *box, double pad,
+                 kd_clip_scratch *scr, bsp_box *out)
+{
+    const prim_record *p = &scene->prims[prim];
+    bsp_box g = *box, pb = bsp_scene_prim_bounds(scene, prim), b;
+    for (int k = 0; k < 3; k++) {
+        g.lo.v[k] -= pad;
+        g.hi.v[k] += pad;
+    }
+    if (box_is_empty(pb) || !box_meets(pb, &g))
+        return 0;
+    int r = 1;
+    if (box_inside(pb, &g)) {
+        b = pb;
+    } else {
+        switch ((shape_kind)p->shape) {
+        case SHAPE_SPHERE:
+            r = clip_sphere(&scene->spheres[p->slot], &g, &b);
+            break;
+        case SHAPE_TRIANGLE: {
+            const triangle_shape *tr = &scene->triangles[p->slot];
+            bsp_vec3 vs[3] = {tr->v0, v3_add(tr->v0, tr->e1), v3_add(tr->v0, tr->e2)};
+            r = clip_polygon(vs, 3, pb, &g, scr, &b);
+            break;
+        }
+        case SHAPE_POLYGON: {
+            const polygon_shape *pg = &scene->polygons[p->slot];
+            r = clip_polygon(scene->verts + pg->first, pg->count, pb, &g, scr, &b);
+            break;
+        }
+        case SHAPE_CONE:
+            b = pb;
+            break;
+        default:
+            return 0;
+        }
+        if (r != 1)
+            return r;
+        /* never beyond the unclipped bounds nor beyond G */
+        for (int k = 0; k < 3; k++) {
+            b.lo.v[k] = dmax(dmax(b.lo.v[k], pb.lo.v[k]), g.lo.v[k]);
+            b.hi.v[k] = dmin(dmin(b.hi.v[k], pb.hi.v[k]), g.hi.v[k]);
+            if (b.lo.v[k] > b.hi.v[k])
+                return 0;
+        }
+    }
+    for (int k = 0; k < 3; k++) {
+        b.lo.v[k] -= pad;
+        b.hi.v[k] += pad;
+    }
+    *out = b;
+    return 1;
+}

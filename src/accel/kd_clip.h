@@ -1,0 +1,48 @@
+/*
+ * kd_clip.h — tight, conservative bounds of the part of a primitive inside a
+ * box ("split-clipped bounds"), for the perfect splits of the SAH builder
+ * (Havran & Bittner 2002; Wald & Havran 2006) and for the invariant checker.
+ *
+ * Contract of kd_clip_prim(scene, prim, box, pad, ...): let G be BOX grown by
+ * PAD on every side. The result is the bounds of (primitive ∩ G), grown by
+ * PAD — with every rounding error of the clipping far below PAD (the padding
+ * is KD_PAD_REL of the scene scale, the errors a few ulps of it), so every
+ * point of the primitive inside G lies at least about PAD inside the result,
+ * exactly as kd_prim_box pads the unclipped bounds. "Empty" (return 0) is
+ * answered only when the primitive is at least about PAD away from BOX.
+ *
+ * Triangles and polygons are clipped exactly (Sutherland–Hodgman against the
+ * planes of G that their bounds cross); a sphere uses the ball ∩ G (exact
+ * per axis) and is dropped when G lies wholly inside it; a cone uses its
+ * bounds ∩ G. A primitive whose bounds lie inside G gets its plain padded
+ * bounds, bit for bit what kd_prim_box returns.
+ */
+#ifndef BSPRAY_ACCEL_KD_CLIP_H
+#define BSPRAY_ACCEL_KD_CLIP_H
+
+#include "accel/kd_tree.h"
+
+/* Vertex scratch for clipping large polygons, grown on demand; zero it
+ * before first use. Without scratch (NULL) large polygons allocate per call. */
+typedef struct kd_clip_scratch {
+    bsp_vec3 *buf[2]; /* ping-pong vertex buffers */
+    size_t cap[2];
+} kd_clip_scratch;
+
+HIDDEN void kd_clip_scratch_free(kd_clip_scratch *scr);
+
+/* Writes the clipped, padded bounds of live primitive PRIM against BOX (see
+ * above) to *OUT and returns 1; returns 0 when the part is empty, -1 when out
+ * of memory. */
+HIDDEN int kd_clip_prim(const bsp_scene *scene, uint32_t prim, const bsp_box *box, double pad,
+                        kd_clip_scratch *scr, bsp_box *out);
+
+/* The checker (kd_tree_check) asks for a primitive in every leaf its bounds
+ * clipped with this fraction of the tree's padding overlap: the builder clips
+ * with the whole padding, so its assignment is a superset with a margin of
+ * half the padding — far above rounding — whatever cell it last clipped
+ * against, and the checked property (every primitive within pad/2 of a leaf
+ * is listed there) is still far stronger than exactness needs. */
+#define KD_CHECK_PAD_FRACTION 0.5
+
+#endif /* BSPRAY_ACCEL_KD_CLIP_H */

@@ -1,0 +1,327 @@
+/*
+ * kd_cost.c — the cost model of the SAH builders (MacDonald & Booth 1990):
+ * default per-kind intersection costs T_i relative to one traversal step
+ * C_trav, their resolution from build options, the surface-area measure, and
+ * bsp_calibrate_costs, which measures the costs on the running machine
+ * (after Mitsuba's findCosts, which fits them to timings of random rays).
+ *
+ * Calibration: the shapes of each kind are set up directly (the code of
+ * src/geom, as the traversal calls it) at random in the unit cube, and 512
+ * rays from random points of [-1, 2]^3 aimed at random points of the unit
+ * cube are tested against every one of them; the best of several timed
+ * rounds gives ns per test. Polygons are regular n-gons for several n, fitted
+ * by least squares to base + vertex * n. A traversal step is timed on a
+ * Kaplan tree over many tiny spheres, where rays make many steps and few
+ * tests: (time - tests * sphere cost) / steps.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "accel/kd_cost.h"
+#include "geom/vec.h"
+
+/*
+ * Defaults, in units of one traversal step (C_trav = 1). Measured with
+ * bsp_calibrate_costs (`bspray calibrate`) on the development machine (an
+ * Intel Xeon VM, gcc -O2, 2 cores, single thread) when the SAH builder was
+ * written: traversal step 4.0 ns; sphere 6.3 ns, triangle 5.0 ns, polygon
+ * 7.6 + 2.9 n ns, cone 12.2 ns (median of 3 calibration runs, rounded).
+ */
+#define NS_TRAVERSAL 4.0
+#define NS_SPHERE 6.3
+#define NS_TRIANGLE 5.0
+#define NS_POLYGON_BASE 7.6
+#define NS_POLYGON_VERTEX 2.9
+#define NS_CONE 12.2
+
+void kd_cost_defaults(bsp_sah_costs *c)
+{
+    c->traversal = 1.0;
+    c->sphere = NS_SPHERE / NS_TRAVERSAL;
+    c->triangle = NS_TRIANGLE / NS_TRAVERSAL;
+    c->polygon_base = NS_POLYGON_BASE / NS_TRAVERSAL;
+    c->polygon_vertex = NS_POLYGON_VERTEX / NS_TRAVERSAL;
+    c->cone = NS_CONE / NS_TRAVERSAL;
+}
+
+static double or_default(double v, double d)
+{
+    return v > 0.0 && isfinite(v) ? v : d;
+}
+
+void kd_cost_resolve(const bsp_build_options *o, kd_cost_model *m)
+{
+    bsp_sah_costs d;
+    kd_cost_defaults(&d);
+    const bsp_sah_costs *c = &o->sah_costs;
+    m->c.traversal = or_default(c->traversal, d.traversal);
+    m->c.sphere = or_default(c->sphere, d.sphere);
+    m->c.triangle = or_default(c->triangle, d.triangle);
+    m->c.polygon_base = or_default(c->polygon_base, d.polygon_base);
+    m->c.polygon_vertex = or_default(c->polygon_vertex, d.polygon_vertex);
+    m->c.cone = or_default(c->cone, d.cone);
+    double b = o->sah_empty_bonus;
+    if (b == 0.0 || !isfinite(b))
+        b = KD_DEFAULT_EMPTY_BONUS;
+    else if (b < 0.0)
+        b = 0.0;
+    else if (b > 0.99)
+        b = 0.99;
+    m->empty_bonus = b;
+}
+
+double kd_prim_cost(const bsp_scene *scene, uint32_t prim, const bsp_sah_costs *c)
+{
+    const prim_record *p = &scene->prims[prim];
+    switch ((shape_kind)p->shape) {
+    case SHAPE_SPHERE:
+        return c->sphere;
+    case SHAPE_TRIANGLE:
+        return c->triangle;
+    case SHAPE_POLYGON:
+        return c->polygon_base + c->polygon_vertex * (double)scene->polygons[p->slot].count;
+    case SHAPE_CONE:
+        return c->cone;
+    case SHAPE_NONE:
+        break;
+    }
+    return 0.0;
+}
+
+double kd_area_surface(const bsp_box *box, const void *ctx)
+{
+    (void)ctx;
+    return kd_surface_area(box);
+}
+
+/* --- calibration ------------------------------------------------------------------ */
+
+#define CAL_RAYS 512
+#define CAL_SHAPES 256
+#define CAL_ROUNDS 5
+#define CAL_MIN_SECONDS 0.02
+
+static double urand(uint64_t *s)
+{
+    *s ^= *s >> 12;
+    *s ^= *s << 25;
+    *s ^= *s >> 27;
+    return (double)((*s * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static bsp_vec3 vrand(uint64_t *s, double lo, double hi)
+{
+    double x = lo + (hi - lo) * urand(s), y = lo + (hi - lo) * urand(s);
+    return bsp_v3(x, y, lo + (hi - lo) * urand(s));
+}
+
+typedef struct cal_set {
+    shape_kind kind;
+    size_t n;
+    const sphere_shape *spheres;
+    const triangle_shape *triangles;
+    const polygon_shape *polygons;
+    const bsp_vec3 *verts;
+    const cone_shape *cones;
+} cal_set;
+
+/* One pass of every ray against every shape; returns the number of hits. */
+static size_t cal_pass(const cal_set *cs, const bsp_ray *rays)
+{
+    size_t hits = 0;
+    double t, u, v;
+    for (size_t r = 0; r < CAL_RAYS; r++) {
+        const bsp_ray *ray = &rays[r];
+        switch (cs->kind) {
+        case SHAPE_SPHERE:
+            for (size_t i = 0; i < cs->n; i++)
+                hits += (size_t)sphere_intersect(&cs->spheres[i], ray, &t);
+            break;
+        case SHAPE_TRIANGLE:
+            for (size_t i = 0; i < cs->n; i++)
+                hits += (size_t)triangle_intersect(&cs->triangles[i], ray, &t, &u, &v);
+            break;
+        case SHAPE_POLYGON:
+            for (size_t i = 0; i < cs->n; i++)
+                hits += (size_t)polygon_intersect(&cs->polygons[i], cs->verts, ray, &t);
+            break;
+        case SHAPE_CONE:
+            for (size_t i = 0; i < cs->n; i++)
+                hits += (size_t)cone_intersect(&cs->cones[i], ray, &t);
+            break;
+        case SHAPE_NONE:
+            break;
+        }
+    }
+    return hits;
+}
+
+static volatile size_t cal_sink;
+
+/* ns per ray-shape test: the best of CAL_ROUNDS rounds of at least
+ * CAL_MIN_SECONDS each. */
+static double cal_time(const cal_set *cs, const bsp_ray *rays)
+{
+    double best = INFINITY;
+    for (int round = 0; round < CAL_ROUNDS; round++) {
+        size_t passes = 0, hits = 0;
+        double t0 = accel_now(), el;
+        do {
+            hits += cal_pass(cs, rays);
+            passes++;
+            el = accel_now() - t0;
+        } while (el < CAL_MIN_SECONDS);
+        cal_sink += hits;
+        double ns = el * 1e9 / ((double)passes * CAL_RAYS * (double)cs->n);
+        if (ns < best)
+            best = ns;
+    }
+    return best;
+}
+
+/* A random unit vector and two unit vectors perpendicular to it. */
+static void frame(uint64_t *s, bsp_vec3 *n, bsp_vec3 *a, bsp_vec3 *b)
+{
+    bsp_vec3 d;
+    do
+        d = vrand(s, -1, 1);
+    while (v3_dot(d, d) < 0.01 || v3_dot(d, d) > 1);
+    *n = v3_normalize(d);
+    bsp_vec3 h = fabs(n->x) < 0.9 ? bsp_v3(1, 0, 0) : bsp_v3(0, 1, 0);
+    *a = v3_normalize(v3_cross(*n, h));
+    *b = v3_cross(*n, *a);
+}
+
+static bsp_status cal_traversal(double ns_sphere, double *ns_out, bsp_error *err)
+{
+    bsp_scene *sc = bsp_scene_create();
+    if (!sc)
+        return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    uint64_t s = 0x5eed5eedULL;
+    bsp_status st = BSP_OK;
+    for (int i = 0; i < 4000 && st == BSP_OK; i++)
+        st = bsp_scene_add_sphere(sc, vrand(&s, 0, 1), 0.002, err);
+    bsp_accel *a = NULL;
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_KAPLAN;
+    if (st == BSP_OK)
+        st = bsp_accel_build(sc, &o, &a, err);
+    bsp_query *q = a ? bsp_query_create(a) : NULL;
+    if (st == BSP_OK && !q)
+        st = error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    if (st == BSP_OK) {
+        double best = INFINITY;
+        for (int round = 0; round < CAL_ROUNDS; round++) {
+            bsp_query_reset_counters(q);
+            double t0 = accel_now(), el;
+            size_t hits = 0;
+            do {
+                for (int r = 0; r < 256; r++) {
+                    bsp_ray ray;
+                    ray.org = vrand(&s, -1, 2);
+                    ray.dir = v3_sub(vrand(&s, 0, 1), ray.org);
+                    ray.tmin = 0;
+                    ray.tmax = INFINITY;
+                    bsp_hit h;
+                    hits += (size_t)bsp_intersect(a, q, &ray, &h);
+                }
+                el = accel_now() - t0;
+            } while (el < 4 * CAL_MIN_SECONDS);
+            cal_sink += hits;
+            const bsp_query_counters *c = bsp_query_get_counters(q);
+            double ns = (el * 1e9 - (double)c->isect_tests * ns_sphere) /
+                        (double)(c->traversal_steps ? c->traversal_steps : 1);
+            if (ns < best)
+                best = ns;
+        }
+        *ns_out = best > 0.1 ? best : 0.1;
+    }
+    bsp_query_destroy(q);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(sc);
+    return st;
+}
+
+bsp_status bsp_calibrate_costs(bsp_sah_costs *ns, bsp_error *err)
+{
+    enum { NPOLY = 5 };
+    static const uint32_t poly_n[NPOLY] = {4, 8, 16, 32, 64};
+    bsp_ray *rays = malloc(CAL_RAYS * sizeof *rays);
+    sphere_shape *sp = malloc(CAL_SHAPES * sizeof *sp);
+    triangle_shape *tr = malloc(CAL_SHAPES * sizeof *tr);
+    cone_shape *co = malloc(CAL_SHAPES * sizeof *co);
+    polygon_shape *pg = malloc(CAL_SHAPES * sizeof *pg);
+    bsp_vec3 *verts = malloc((size_t)CAL_SHAPES * 64 * sizeof *verts);
+    bsp_status st = BSP_OK;
+    if (!rays || !sp || !tr || !co || !pg || !verts) {
+        st = error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+        goto done;
+    }
+    uint64_t s = 0xca1b7a7eULL;
+    for (int r = 0; r < CAL_RAYS; r++) {
+        rays[r].org = vrand(&s, -1, 2);
+        rays[r].dir = v3_sub(vrand(&s, 0, 1), rays[r].org);
+        rays[r].tmin = 0;
+        rays[r].tmax = INFINITY;
+    }
+    size_t n = 0;
+    while (n < CAL_SHAPES)
+        n += (size_t)sphere_setup(&sp[n], vrand(&s, 0, 1), 0.02 + 0.08 * urand(&s));
+    for (n = 0; n < CAL_SHAPES;) {
+        bsp_vec3 c = vrand(&s, 0, 1);
+        n += (size_t)triangle_setup(&tr[n], v3_add(c, vrand(&s, -.1, .1)),
+                                    v3_add(c, vrand(&s, -.1, .1)), v3_add(c, vrand(&s, -.1, .1)),
+                                    SHAPE_NO_NORMALS);
+    }
+    for (n = 0; n < CAL_SHAPES;) {
+        bsp_vec3 b = vrand(&s, 0, 1);
+        n += (size_t)cone_setup(&co[n], b, 0.02 + 0.05 * urand(&s),
+                                v3_add(b, vrand(&s, -.15, .15)), 0.05 * urand(&s));
+    }
+    cal_set cs = {SHAPE_SPHERE, CAL_SHAPES, sp, tr, pg, verts, co};
+    memset(ns, 0, sizeof *ns);
+    ns->sphere = cal_time(&cs, rays);
+    cs.kind = SHAPE_TRIANGLE;
+    ns->triangle = cal_time(&cs, rays);
+    cs.kind = SHAPE_CONE;
+    ns->cone = cal_time(&cs, rays);
+
+    /* polygons: regular n-gons in random planes; least squares t = a + b n */
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    cs.kind = SHAPE_POLYGON;
+    for (int j = 0; j < NPOLY; j++) {
+        uint32_t nv = poly_n[j];
+        for (n = 0; n < CAL_SHAPES;) {
+            bsp_vec3 c = vrand(&s, 0, 1), nn, ea, eb;
+            frame(&s, &nn, &ea, &eb);
+            double rad = 0.05 + 0.05 * urand(&s);
+            uint32_t first = (uint32_t)(n * 64);
+            for (uint32_t i = 0; i < nv; i++) {
+                double ang = 2 * BSP_PI * i / nv;
+                verts[first + i] = v3_madd(v3_madd(c, ea, rad * cos(ang)), eb, rad * sin(ang));
+            }
+            n += (size_t)polygon_setup(&pg[n], verts, first, nv, SHAPE_NO_NORMALS);
+        }
+        double y = cal_time(&cs, rays);
+        sx += nv;
+        sy += y;
+        sxx += (double)nv * nv;
+        sxy += nv * y;
+    }
+    double slope = (NPOLY * sxy - sx * sy) / (NPOLY * sxx - sx * sx);
+    ns->polygon_vertex = slope > 0.01 ? slope : 0.01;
+    ns->polygon_base = (sy - slope * sx) / NPOLY;
+    if (!(ns->polygon_base > 0.01))
+        ns->polygon_base = 0.01;
+    st = cal_traversal(ns->sphere, &ns->traversal, err);
+done:
+    free(rays);
+    free(sp);
+    free(tr);
+    free(co);
+    free(pg);
+    free(verts);
+    return st;
+}

@@ -1,0 +1,55 @@
+/*
+ * kd_cost.h — the cost model of the SAH kd-tree builders (MacDonald & Booth
+ * 1990, as used by Havran, Bittner & Kopal): per-kind intersection costs T_i,
+ * the traversal cost C_trav, the empty-space bonus, and the probability
+ * measure A(box) behind the conditional probabilities A(child) / A(node).
+ *
+ * The measure is pluggable (kd_area_fn): plain SAH uses the surface area;
+ * the paper's modified SAH replaces it by the projected area of the box seen
+ * from a camera (PER) or along a direction (PAR), clipped to the viewport.
+ * The builder calls the measure for the node and for both children of every
+ * candidate plane, so a measure need not be separable by axis.
+ */
+#ifndef BSPRAY_ACCEL_KD_COST_H
+#define BSPRAY_ACCEL_KD_COST_H
+
+#include "accel/kd_tree.h"
+
+/* The probability measure of a box (any non-negative unit; only ratios of
+ * a child to its node matter). CTX is the measure's own data. */
+typedef double (*kd_area_fn)(const bsp_box *box, const void *ctx);
+
+/* Surface area 2 (dx dy + dy dz + dz dx): plain SAH (CTX unused). */
+static inline double kd_surface_area(const bsp_box *b)
+{
+    double dx = b->hi.x - b->lo.x, dy = b->hi.y - b->lo.y, dz = b->hi.z - b->lo.z;
+    return 2.0 * (dx * dy + dy * dz + dz * dx);
+}
+HIDDEN double kd_area_surface(const bsp_box *box, const void *ctx);
+
+/* The resolved cost model of one build. */
+typedef struct kd_cost_model {
+    bsp_sah_costs c;    /* every field > 0 */
+    double empty_bonus; /* in [0, 1) */
+} kd_cost_model;
+
+/* The built-in defaults (C_trav = 1; see kd_cost.c for how they were measured). */
+HIDDEN void kd_cost_defaults(bsp_sah_costs *c);
+#define KD_DEFAULT_EMPTY_BONUS 0.1
+
+/* Resolves the SAH fields of O: every 0 (or invalid) field takes its default;
+ * a negative empty bonus means none. */
+HIDDEN void kd_cost_resolve(const bsp_build_options *o, kd_cost_model *m);
+
+/* T_i of primitive PRIM (a live one) under costs C. */
+HIDDEN double kd_prim_cost(const bsp_scene *scene, uint32_t prim, const bsp_sah_costs *c);
+
+/* The SAH builder with a pluggable measure: fills T (already set up by
+ * kd_tree_init) over SCENE with the costs and limits of O, measuring
+ * probabilities with AREA(box, CTX). kd_build_sah is this with the surface
+ * area. Deterministic: the same input gives the same node array. */
+HIDDEN bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene,
+                                       const bsp_build_options *o, kd_area_fn area,
+                                       const void *ctx, bsp_error *err);
+
+#endif /* BSPRAY_ACCEL_KD_COST_H */

@@ -1,0 +1,788 @@
+/*
+ * kd_split_sah.c — the SAH kd-tree builder: MacDonald & Booth's cost model
+ * (1990; Havran, Bittner & Kopal's "surface area heuristics"), built exactly
+ * in O(N log N) by Wald & Havran's presorted event lists (2006), with perfect
+ * splits (straddling primitives clipped to each child).
+ *
+ * Cost of a candidate plane in node V (T_i from kd_cost.c, A the pluggable
+ * measure of kd_cost.h, called for the node and both children):
+ *     C = C_trav + A(V_L)/A(V) sum_{i in L} T_i + A(V_R)/A(V) sum_{i in R} T_i,
+ * times (1 - empty_bonus) when one side holds no primitive (empty space
+ * culling; the whole cost is scaled, as Mitsuba does). A leaf costs sum T_i.
+ *
+ * Events. Each primitive of a node carries a box: its padded bounds, clipped
+ * (kd_clip.c) to the cell where it last straddled a plane, rounded outward to
+ * floats (lo down, hi up). Per axis it has a START event at lo and an END
+ * event at hi, lo < hi always (the padding is positive). An event is one
+ * 64-bit key — orderable float bits of the position, then the type
+ * (END = 0 < START = 1), then the primitive index — so sorting keys sorts by
+ * (position, type, primitive), a total order, and the build is deterministic.
+ * The three lists of a node (2n events each) are sorted once at the root
+ * (stable radix sort); children inherit the order by stable filtering, and
+ * only the events of straddling primitives are made anew, sorted and merged.
+ *
+ * Exactness conventions (kd_tree.h). Candidates are event positions, floats,
+ * strictly inside the cell; the float is the stored plane and the child
+ * boundary. Classification is strict: left if lo < s, right if hi > s. A
+ * primitive lying in a plane c has the box [c - pad, c + pad] (rounded
+ * outward): a split at c puts it in both children, the candidates c - pad
+ * and c + pad cut it off on either side — in-plane primitives need no
+ * planar events, the padding handles them explicitly. A straddler is clipped
+ * to each child cell and dropped from a child its clipped box does not
+ * overlap (it is then at least about pad away from that cell).
+ *
+ * Termination: a leaf at max_depth or with <= max_leaf_prims primitives, or
+ * when no candidate lies inside the cell, or when the best split does not
+ * beat the leaf cost — except that, as in pbrt and Mitsuba, up to
+ * MAX_BAD_REFINES such splits are made along a path (unless the split costs
+ * over 4x the leaf and the node has < 16 primitives), so a split that only
+ * pays off deeper can be found. Such a subtree is retracted into one leaf
+ * afterwards when its actual cost is not below the leaf cost (Mitsuba).
+ *
+ * Memory: one event stack addressed by index (growing it is safe). A node's
+ * lists are at [base, base + 6n); the right child's lists are written above
+ * the node's free top, then the left child's are made in place (stable
+ * compaction forward, merge backward), so a chain of cuts reuses one region
+ * and the stack stays O(N) beyond straddler duplication. No allocation per
+ * node: every scratch array is grown amortized.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "accel/kd_clip.h"
+#include "accel/kd_cost.h"
+#include "accel/kd_tree.h"
+#include "geom/vec.h"
+
+#define EV_START ((uint64_t)1 << 31)
+#define EV_PRIM 0x0fffffffu /* SCENE_MAX_PRIMS = 2^28 */
+static int MAX_BAD_REFINES = 1;
+
+_Static_assert(SCENE_MAX_PRIMS <= (size_t)EV_PRIM + 1, "primitive index fits an event");
+
+enum { CLS_LEFT = 1, CLS_RIGHT = 2, CLS_BOTH = 3 };
+
+/* --- keys ------------------------------------------------------------------------------ */
+
+static inline uint32_t float_key(float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+
+static inline float key_float(uint32_t k)
+{
+    uint32_t u = k ^ (((k >> 31) - 1u) | 0x80000000u); /* branch-free inverse */
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+static inline uint64_t make_event(float pos, int start, uint32_t prim)
+{
+    return ((uint64_t)float_key(pos) << 32) | (start ? EV_START : 0) | prim;
+}
+
+static inline uint32_t ev_prim(uint64_t e)
+{
+    return (uint32_t)e & EV_PRIM;
+}
+
+/* The float next to F towards -inf (F finite or +inf; F = -0 never occurs:
+ * callers normalise zeros). */
+static inline float float_below(float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    if (f == 0.0f)
+        u = 0x80000001u; /* the negative subnormal nearest 0 */
+    else if (u & 0x80000000u)
+        u++;
+    else
+        u--;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+static inline float float_above(float f)
+{
+    return -float_below(-f);
+}
+
+/* The largest float <= X and the smallest float >= X (never -0). */
+static inline float round_down(double x)
+{
+    float f = (float)x;
+    if ((double)f > x)
+        f = float_below(f == 0.0f ? 0.0f : f);
+    return f == 0.0f ? 0.0f : f;
+}
+
+static inline float round_up(double x)
+{
+    float f = (float)x;
+    if ((double)f < x)
+        f = float_above(f == 0.0f ? 0.0f : f);
+    return f == 0.0f ? 0.0f : f;
+}
+
+/* --- sorting -------------------------------------------------------------------------- */
+
+/* LSD radix sort of A[0..N) by the whole key, 6 passes of 11 bits through TMP[0..N); passes where every key has the
+ * same digit are skipped. */
+static void radix_sort(uint64_t *a, uint64_t *tmp, size_t n)
+{
+    enum { BITS = 11, BUCKETS = 1 << BITS };
+    size_t count[BUCKETS];
+    uint64_t *src = a, *dst = tmp;
+    for (int shift = 0; shift < 64; shift += BITS) {
+        memset(count, 0, sizeof count);
+        for (size_t i = 0; i < n; i++)
+            count[(src[i] >> shift) & (BUCKETS - 1)]++;
+        if (n == 0 || count[(src[0] >> shift) & (BUCKETS - 1)] == n)
+            continue;
+        size_t sum = 0;
+        for (int b = 0; b < BUCKETS; b++) {
+            size_t c = count[b];
+            count[b] = sum;
+            sum += c;
+        }
+        for (size_t i = 0; i < n; i++)
+            dst[count[(src[i] >> shift) & (BUCKETS - 1)]++] = src[i];
+        uint64_t *x = src;
+        src = dst;
+        dst = x;
+    }
+    if (src != a)
+        memcpy(a, src, n * sizeof *a);
+}
+
+static int cmp_u64(const void *x, const void *y)
+{
+    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+    return (a > b) - (a < b);
+}
+
+static void sort_keys(uint64_t *a, size_t n)
+{
+    if (n > 48) {
+        qsort(a, n, sizeof *a, cmp_u64);
+        return;
+    }
+    for (size_t i = 1; i < n; i++) {
+        uint64_t x = a[i];
+        size_t j = i;
+        for (; j > 0 && a[j - 1] > x; j--)
+            a[j] = a[j - 1];
+        a[j] = x;
+    }
+}
+
+static int cmp_u32(const void *x, const void *y)
+{
+    uint32_t a = *(const uint32_t *)x, b = *(const uint32_t *)y;
+    return (a > b) - (a < b);
+}
+
+static void sort_u32(uint32_t *a, size_t n)
+{
+    if (n > 32) {
+        qsort(a, n, sizeof *a, cmp_u32);
+        return;
+    }
+    for (size_t i = 1; i < n; i++) {
+        uint32_t x = a[i];
+        size_t j = i;
+        for (; j > 0 && a[j - 1] > x; j--)
+            a[j] = a[j - 1];
+        a[j] = x;
+    }
+}
+
+/* --- builder state ---------------------------------------------------------------------- */
+
+/* How the sweep finds T_i: all equal; by one of at most 8 distinct values,
+ * whose index rides in the spare bits 28..30 of the event (so events order
+ * by position, type, cost class, primitive); or by primitive (more kinds of
+ * cost, e.g. polygons of many vertex counts). */
+enum { COST_UNIFORM, COST_CLASS, COST_ARRAY };
+#define EV_CLASS_SHIFT 28
+
+typedef struct sah_build {
+    kd_tree *t;
+    const bsp_scene *scene;
+    kd_area_fn area;
+    const void *actx;
+    int surface;        /* AREA is the surface area: evaluated inline */
+    double ctrav;       /* C_trav */
+    double bonus_mul;   /* 1 - empty bonus */
+    int cost_mode;      /* COST_*: how an event finds its T_i */
+    double unif;        /* COST_UNIFORM: the T_i of every primitive */
+    double class_cost[8]; /* COST_CLASS: T_i by the class in event bits 28..30 */
+    uint8_t *pclass;    /* COST_CLASS: the class per primitive */
+    float *cost;        /* T_i per primitive (NULL when uniform) */
+    uint8_t *cls;       /* per primitive: CLS_* at the latest split it took part in */
+    uint64_t *ev;       /* the event stack */
+    size_t cap;
+    uint64_t *nev[2];   /* new events of straddlers per side, axis j at j * stride */
+    size_t nev_cap;
+    uint32_t *list;     /* straddlers, leaf lists */
+    size_t list_cap;
+    kd_clip_scratch clip;
+    bsp_error *err;
+} sah_build;
+
+static bsp_status oom(sah_build *b)
+{
+    return error_set(b->err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
+}
+
+static int grow_u64(uint64_t **p, size_t *cap, size_t need)
+{
+    if (need <= *cap)
+        return 1;
+    size_t ncap = *cap * 2 > need ? *cap * 2 : need;
+    uint64_t *np = realloc(*p, ncap * sizeof *np);
+    if (!np)
+        return 0;
+    *p = np;
+    *cap = ncap;
+    return 1;
+}
+
+static int grow_list(sah_build *b, size_t need)
+{
+    if (need <= b->list_cap)
+        return 1;
+    size_t ncap = b->list_cap * 2 > need ? b->list_cap * 2 : need;
+    uint32_t *np = realloc(b->list, ncap * sizeof *np);
+    if (!np)
+        return 0;
+    b->list = np;
+    b->list_cap = ncap;
+    return 1;
+}
+
+static int grow_nev(sah_build *b, size_t need)
+{
+    if (need <= b->nev_cap)
+        return 1;
+    size_t ncap = b->nev_cap * 2 > need ? b->nev_cap * 2 : need;
+    for (int s = 0; s < 2; s++) {
+        uint64_t *np = realloc(b->nev[s], ncap * sizeof *np);
+        if (!np)
+            return 0;
+        b->nev[s] = np;
+    }
+    b->nev_cap = ncap;
+    return 1;
+}
+
+static double measure(const sah_build *b, const bsp_box *box)
+{
+    return b->surface ? kd_surface_area(box) : b->area(box, b->actx);
+}
+
+/* --- the sweep ---------------------------------------------------------------------------- */
+
+typedef struct split_choice {
+    double cost;
+    unsigned axis;
+    float pos;
+    int found;
+} split_choice;
+
+static inline double ev_cost(const sah_build *b, uint64_t x, int mode)
+{
+    return mode == COST_UNIFORM ? b->unif
+           : mode == COST_CLASS ? b->class_cost[(x >> EV_CLASS_SHIFT) & 7]
+                                : (double)b->cost[ev_prim(x)];
+}
+
+/* Evaluates the candidates of axis K (the node's sorted events E[0..M))
+ * strictly inside CELL, keeping the cheapest in *BEST (ties: the earlier
+ * axis, then the lower position). MODE and SURFACE are constants after
+ * inlining (COST_*, and whether the measure is the surface area).
+ *
+ * The cost is evaluated at every event, between its END part and its START
+ * part: after subtracting the ENDs up to and including it, before adding the
+ * STARTs from it on. At the first START of a position (or at its last END
+ * when no START follows) that gives the true counts at the plane (left:
+ * lo < p, right: hi > p); at the other events of the position one side is
+ * overcounted, and the cost is monotone in both counts (also across the empty
+ * bonus and in floating point), so those evaluations never win. So the loop
+ * needs no data-dependent branch. */
+static inline __attribute__((always_inline)) void
+sweep_axis(const sah_build *b, const uint64_t *e, size_t m, unsigned k, const bsp_box *cell,
+           double inv_area, double tsum, size_t n, const int mode, const int surface,
+           split_choice *best)
+{
+    const double lo = cell->lo.v[k], hi = cell->hi.v[k];
+    const unsigned j1 = (k + 1) % 3, j2 = (k + 2) % 3;
+    const double d1 = cell->hi.v[j1] - cell->lo.v[j1], d2 = cell->hi.v[j2] - cell->lo.v[j2];
+    const double cross = d1 * d2, perim = d1 + d2;
+    const double ctrav = b->ctrav, bonus = b->bonus_mul, unif_inv = b->unif * inv_area;
+    const kd_area_fn area = b->area;
+    const void *actx = b->actx;
+    bsp_box lb = *cell, rb = *cell;
+    double tl = 0.0, tr = tsum, best_cost = best->cost;
+    size_t nl = 0, nr = n, best_i = SIZE_MAX;
+    for (size_t i = 0; i < m; i++) {
+        uint64_t x = e[i];
+        size_t start = (size_t)(x >> 31) & 1;
+        double t = 0.0;
+        nr -= start ^ 1;
+        if (mode != COST_UNIFORM) {
+            t = ev_cost(b, x, mode);
+            tr -= start ? 0.0 : t;
+        }
+        double p = (double)key_float((uint32_t)(x >> 32));
+        double al, ar, c;
+        if (surface) {
+            al = cross + (p - lo) * perim; /* half areas: the factor 2 is in inv_area */
+            ar = cross + (hi - p) * perim;
+        } else if (p > lo && p < hi) {
+            lb.hi.v[k] = p;
+            rb.lo.v[k] = p;
+            al = area(&lb, actx);
+            ar = area(&rb, actx);
+        } else {
+            al = ar = 0.0;
+        }
+        if (mode == COST_UNIFORM)
+            c = ctrav + (al * (double)nl + ar * (double)nr) * unif_inv;
+        else
+            c = ctrav + (al * tl + ar * tr) * inv_area;
+        c = ((nl == 0) | (nr == 0)) ? c * bonus : c;
+        c = (p > lo && p < hi) ? c : INFINITY;
+        best_i = c < best_cost ? i : best_i;
+        best_cost = c < best_cost ? c : best_cost;
+        nl += start;
+        if (mode != COST_UNIFORM)
+            tl += start ? t : 0.0;
+    }
+    if (best_i != SIZE_MAX) {
+        best->cost = best_cost;
+        best->axis = k;
+        best->pos = key_float((uint32_t)(e[best_i] >> 32));
+        best->found = 1;
+    }
+}
+
+#define SWEEP_CASE(MODE)                                                                        \
+    case MODE:                                                                                  \
+        if (b->surface)                                                                         \
+            sweep_axis(b, e, m, k, cell, inv_area, tsum, n, MODE, 1, best);                     \
+        else                                                                                    \
+            sweep_axis(b, e, m, k, cell, inv_area, tsum, n, MODE, 0, best);                     \
+        break;
+
+/* The sweep of axis K, specialised by cost mode and measure. */
+static void sweep(const sah_build *b, const uint64_t *e, size_t m, unsigned k,
+                  const bsp_box *cell, double inv_area, double tsum, size_t n, split_choice *best)
+{
+    switch (b->cost_mode) {
+        SWEEP_CASE(COST_UNIFORM)
+        SWEEP_CASE(COST_CLASS)
+        SWEEP_CASE(COST_ARRAY)
+    }
+}
+
+/* --- nodes ---------------------------------------------------------------------------------- */
+
+/* A node's event lists: axis k at ev[base + k * stride], 2n events each. */
+typedef struct node_lists {
+    size_t base, stride, n;
+    double tsum; /* sum of T_i */
+} node_lists;
+
+/* kd_make_leaf, except that an empty leaf is written directly: with no
+ * primitive stored yet kd_make_leaf would memcpy from/to NULL (0 bytes, but
+ * undefined behaviour). */
+static int put_leaf(kd_tree *t, uint32_t node, const uint32_t *prims, size_t n)
+{
+    if (n > 0)
+        return kd_make_leaf(t, node, prims, n);
+    t->nodes[node].u.first = (uint32_t)t->nprims;
+    t->nodes[node].bits = KD_LEAF_TAG;
+    return 1;
+}
+
+/* Makes NODE a leaf of the primitives whose axis-0 events are E[0..2N). */
+static bsp_status make_leaf(sah_build *b, uint32_t node, const uint64_t *e, size_t n)
+{
+    if (!grow_list(b, n))
+        return oom(b);
+    size_t c = 0;
+    for (size_t i = 0; i < 2 * n; i++)
+        if (e[i] & EV_START)
+            b->list[c++] = ev_prim(e[i]);
+    sort_u32(b->list, c);
+    return put_leaf(b->t, node, b->list, c) ? BSP_OK : oom(b);
+}
+
+/* Clips straddler P to CELL and writes its 6 events at OUT[k * stride + at]
+ * (k = 0..2) when the rounded clipped box overlaps CELL; returns 1 then. */
+static int clipped_events(sah_build *b, uint32_t p, const bsp_box *cell, uint64_t *out,
+                          size_t stride, size_t at, int *fail)
+{
+    bsp_box cb;
+    int r = kd_clip_prim(b->scene, p, cell, b->t->pad, &b->clip, &cb);
+    if (r < 0)
+        *fail = 1;
+    if (r <= 0)
+        return 0;
+    float lo[3], hi[3];
+    for (int k = 0; k < 3; k++) {
+        lo[k] = round_down(cb.lo.v[k]);
+        hi[k] = round_up(cb.hi.v[k]);
+        if (!((double)lo[k] < cell->hi.v[k] && (double)hi[k] > cell->lo.v[k]))
+            return 0; /* touches the cell at most on its boundary */
+    }
+    uint64_t cls = b->pclass ? (uint64_t)b->pclass[p] << EV_CLASS_SHIFT : 0;
+    for (int k = 0; k < 3; k++) {
+        out[k * stride + at] = make_event(lo[k], 1, p) | cls;
+        out[k * stride + at + 1] = make_event(hi[k], 0, p) | cls;
+    }
+    return 1;
+}
+
+/* Merges the sorted NEW[0..NN) into the sorted DST[0..A), in place from the
+ * back (DST has room for A + NN). */
+static void merge_back(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn)
+{
+    size_t o = a + nn;
+    while (nn > 0) {
+        if (a > 0 && dst[a - 1] > nw[nn - 1])
+            dst[--o] = dst[--a];
+        else
+            dst[--o] = nw[--nn];
+    }
+}
+
+/* Builds the subtree of NODE over CELL from the lists L; ev[top, ...) is
+ * free. *COST_OUT: the subtree's cost under the model (for retraction). */
+static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lists L, size_t top,
+                             int depth, int bad, double *cost_out)
+{
+    kd_tree *t = b->t;
+    const size_t n = L.n, m = 2 * n;
+    const double tsum = L.tsum;
+    *cost_out = tsum;
+    double area = measure(b, &cell);
+    if (n <= (size_t)t->max_leaf_prims || depth >= t->max_depth || !(area > 0.0))
+        return make_leaf(b, node, b->ev + L.base, n);
+
+    /* 1. the best plane: one sweep per axis */
+    split_choice best = {INFINITY, 0, 0.0f, 0};
+    double inv_area = (b->surface ? 2.0 : 1.0) / area; /* the sweep uses half areas */
+    for (unsigned k = 0; k < 3; k++) {
+        const uint64_t *e = b->ev + L.base + k * L.stride;
+        sweep(b, e, m, k, &cell, inv_area, tsum, n, &best);
+    }
+    if (!best.found)
+        return make_leaf(b, node, b->ev + L.base, n);
+    int bad_here = 0;
+    if (best.cost >= tsum) {
+        if (bad >= MAX_BAD_REFINES || (best.cost > 4.0 * tsum && n < 16))
+            return make_leaf(b, node, b->ev + L.base, n);
+        bad_here = 1;
+    }
+
+    /* 2. classify by the split axis's events (keys compare as positions):
+     * START >= s: right only; END <= s: left only (lo < hi <= s); the rest
+     * straddles. Counts and cost sums of the one-sided ones on the way. */
+    const unsigned axis = best.axis;
+    const double s = (double)best.pos;
+    const uint32_t ks = float_key(best.pos);
+    size_t n_lonly = 0, n_ronly = 0;
+    double t_lonly = 0.0, t_ronly = 0.0;
+    {
+        const uint64_t *e = b->ev + L.base + axis * L.stride;
+        uint8_t *cls = b->cls;
+        for (size_t i = 0; i < m; i++) {
+            uint64_t x = e[i];
+            uint32_t p = ev_prim(x), hk = (uint32_t)(x >> 32);
+            size_t start = (size_t)(x >> 31) & 1;
+            size_t is_r = start & (hk >= ks), is_l = (start ^ 1) & (hk <= ks);
+            uint8_t c_start = is_r ? CLS_RIGHT : CLS_BOTH;
+            uint8_t c_end = is_l ? CLS_LEFT : cls[p];
+            cls[p] = start ? c_start : c_end;
+            n_ronly += is_r;
+            n_lonly += is_l;
+            if (b->cost_mode != COST_UNIFORM) {
+                double tp = ev_cost(b, x, b->cost_mode);
+                t_ronly += is_r ? tp : 0.0;
+                t_lonly += is_l ? tp : 0.0;
+            }
+        }
+    }
+    const size_t ns = n - n_lonly - n_ronly;
+
+    /* 3. the one-sided events: right ones compacted above TOP (the
+     * straddlers gathered on the way), left ones compacted in place */
+    bsp_box lcell = cell, rcell = cell;
+    lcell.hi.v[axis] = rcell.lo.v[axis] = s;
+    node_lists LL = {L.base, L.stride, 0, 0.0}, RL = {L.base, L.stride, 0, 0.0};
+    size_t free_top = top;
+    if (ns == 0 && n_ronly == 0) {
+        LL.n = n; /* all left: the lists stay as they are */
+        LL.tsum = tsum;
+    } else if (ns == 0 && n_lonly == 0) {
+        RL.n = n; /* all right: likewise */
+        RL.tsum = tsum;
+    } else {
+        RL.base = top;
+        RL.stride = 2 * (n_ronly + ns);
+        free_top = top + 3 * RL.stride;
+        if (!grow_u64(&b->ev, &b->cap, free_top) || !grow_list(b, n + 1))
+            return oom(b);
+        const uint8_t *cls = b->cls;
+        uint32_t *strad = b->list;
+        size_t nsg = 0;
+        for (unsigned k = 0; k < 3; k++) {
+            const uint64_t *src = b->ev + L.base + k * L.stride;
+            uint64_t *dst = b->ev + RL.base + k * RL.stride;
+            size_t o = 0;
+            if (k == 0) {
+                for (size_t i = 0; i < m; i++) {
+                    uint64_t x = src[i];
+                    uint8_t c = cls[ev_prim(x)];
+                    dst[o] = x;
+                    o += c == CLS_RIGHT;
+                    strad[nsg] = ev_prim(x);
+                    nsg += (c == CLS_BOTH) & (size_t)((x >> 31) & 1);
+                }
+            } else {
+                for (size_t i = 0; i < m; i++) {
+                    uint64_t x = src[i];
+                    dst[o] = x;
+                    o += cls[ev_prim(x)] == CLS_RIGHT;
+                }
+            }
+        }
+        for (unsigned k = 0; k < 3; k++) {
+            const uint64_t *src = b->ev + L.base + k * L.stride;
+            uint64_t *dst = b->ev + L.base + k * L.stride; /* writes trail reads */
+            size_t o = 0;
+            for (size_t i = 0; i < m; i++) {
+                uint64_t x = src[i];
+                dst[o] = x;
+                o += cls[ev_prim(x)] == CLS_LEFT;
+            }
+        }
+
+        /* 4. clip the straddlers to each child; their new events, sorted,
+         * merged into the compacted lists */
+        size_t kept[2] = {0, 0};
+        double tkept[2] = {0.0, 0.0};
+        if (ns > 0) {
+            const size_t stride = 2 * ns;
+            if (!grow_nev(b, 3 * stride))
+                return oom(b);
+            int fail = 0;
+            for (size_t i = 0; i < ns; i++) {
+                uint32_t p = strad[i];
+                double tp = b->cost ? (double)b->cost[p] : 0.0;
+                if (clipped_events(b, p, &lcell, b->nev[0], stride, 2 * kept[0], &fail)) {
+                    kept[0]++;
+                    tkept[0] += tp;
+                }
+                if (clipped_events(b, p, &rcell, b->nev[1], stride, 2 * kept[1], &fail)) {
+                    kept[1]++;
+                    tkept[1] += tp;
+                }
+            }
+            if (fail)
+                return oom(b);
+            for (unsigned k = 0; k < 3; k++) {
+                uint64_t *nl_ev = b->nev[0] + k * stride, *nr_ev = b->nev[1] + k * stride;
+                sort_keys(nl_ev, 2 * kept[0]);
+                sort_keys(nr_ev, 2 * kept[1]);
+                merge_back(b->ev + L.base + k * L.stride, 2 * n_lonly, nl_ev, 2 * kept[0]);
+                merge_back(b->ev + RL.base + k * RL.stride, 2 * n_ronly, nr_ev, 2 * kept[1]);
+            }
+        }
+        LL.n = n_lonly + kept[0];
+        RL.n = n_ronly + kept[1];
+        if (b->cost_mode != COST_UNIFORM) {
+            LL.tsum = t_lonly + tkept[0];
+            RL.tsum = t_ronly + tkept[1];
+        } else {
+            LL.tsum = b->unif * (double)LL.n;
+            RL.tsum = b->unif * (double)RL.n;
+        }
+    }
+
+    /* 5. the node and its children */
+    uint32_t child = kd_alloc_pair(t);
+    if (child == UINT32_MAX)
+        return oom(b);
+    kd_make_interior(t, node, axis, best.pos, child);
+    size_t saved_prims = t->nprims;
+    double cl, cr;
+    bsp_status st = build_node(b, child, lcell, LL, free_top, depth + 1, bad + bad_here, &cl);
+    if (st == BSP_OK)
+        st = build_node(b, child + 1, rcell, RL, free_top, depth + 1, bad + bad_here, &cr);
+    if (st != BSP_OK)
+        return st;
+    double cost = b->ctrav + (measure(b, &lcell) * cl + measure(b, &rcell) * cr) / area;
+    if (!bad_here || cost < tsum) {
+        *cost_out = cost;
+        return BSP_OK;
+    }
+
+    /* 6. retract: the speculative split did not pay off; one leaf of the
+     * primitives of the subtree's leaves (each once, in index order) */
+    size_t refs = t->nprims - saved_prims, c = 0;
+    if (!grow_list(b, refs))
+        return oom(b);
+    memcpy(b->list, t->prims + saved_prims, refs * sizeof *b->list);
+    sort_u32(b->list, refs);
+    for (size_t i = 0; i < refs; i++)
+        if (c == 0 || b->list[i] != b->list[c - 1])
+            b->list[c++] = b->list[i];
+    t->nnodes = child;
+    t->nprims = saved_prims;
+    return put_leaf(t, node, b->list, c) ? BSP_OK : oom(b);
+}
+
+/* --- entry points ------------------------------------------------------------------------------ */
+
+void kd_sah_default_limits(bsp_build_options *o, const bsp_scene *scene)
+{
+    size_t n = bsp_scene_prim_count(scene) - bsp_scene_kind_count(scene, BSP_PRIM_DROPPED);
+    if (o->max_depth == 0) {
+        double d = 8.0 + 1.3 * log2(n > 1 ? (double)n : 1.0);
+        int di = (int)lround(d);
+        o->max_depth = di < BSP_KD_MAX_DEPTH_LIMIT ? di : BSP_KD_MAX_DEPTH_LIMIT;
+    }
+    if (o->max_leaf_prims == 0)
+        o->max_leaf_prims = 1;
+}
+
+bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_build_options *o,
+                                kd_area_fn area, const void *ctx, bsp_error *err)
+{
+    kd_cost_model cm;
+    kd_cost_resolve(o, &cm);
+    size_t np = bsp_scene_prim_count(scene);
+    sah_build b;
+    memset(&b, 0, sizeof b);
+    b.t = t;
+    b.scene = scene;
+    b.area = area;
+    b.actx = ctx;
+    b.surface = area == kd_area_surface;
+    b.ctrav = cm.c.traversal;
+    b.bonus_mul = 1.0 - cm.empty_bonus;
+    b.err = err;
+    if (getenv("SAH_BAD")) MAX_BAD_REFINES = atoi(getenv("SAH_BAD"));
+    if (getenv("SAH_BONUS")) b.bonus_mul = 1.0 - atof(getenv("SAH_BONUS"));
+
+    bsp_status st = BSP_OK;
+    size_t n = 0;
+    for (uint32_t p = 0; p < np; p++)
+        n += scene->prims[p].shape != SHAPE_NONE;
+    if (n == 0)
+        return BSP_OK; /* the root stays an empty leaf */
+
+    b.cls = calloc(np, 1);
+    b.cap = 12 * n + 1024; /* the root's lists and a radix buffer, then room to grow */
+    b.ev = malloc(b.cap * sizeof *b.ev);
+    if (!b.cls || !b.ev) {
+        st = oom(&b);
+        goto done;
+    }
+    /* per-primitive costs, unless they are all the same */
+    double first = -1.0;
+    int uniform = 1;
+    for (uint32_t p = 0; p < np && uniform; p++) {
+        if (scene->prims[p].shape == SHAPE_NONE)
+            continue;
+        double c = kd_prim_cost(scene, p, &cm.c);
+        if (first < 0)
+            first = c;
+        else if (c != first)
+            uniform = 0;
+    }
+    b.unif = first;
+    b.cost_mode = uniform ? COST_UNIFORM : COST_ARRAY;
+    if (!uniform) {
+        b.cost = malloc(np * sizeof *b.cost);
+        if (!b.cost) {
+            st = oom(&b);
+            goto done;
+        }
+        for (uint32_t p = 0; p < np; p++)
+            b.cost[p] = scene->prims[p].shape == SHAPE_NONE ? 0.0f
+                                                           : (float)kd_prim_cost(scene, p, &cm.c);
+        /* at most 8 distinct costs: classes in the events */
+        int ncls = 0;
+        b.pclass = malloc(np);
+        if (!b.pclass) {
+            st = oom(&b);
+            goto done;
+        }
+        for (uint32_t p = 0; p < np && ncls <= 8; p++) {
+            int c = 0;
+            if (scene->prims[p].shape == SHAPE_NONE) {
+                b.pclass[p] = 0;
+                continue;
+            }
+            while (c < ncls && b.class_cost[c] != (double)b.cost[p])
+                c++;
+            if (c == ncls && ncls < 8)
+                b.class_cost[ncls] = (double)b.cost[p];
+            if (c == ncls)
+                ncls++;
+            b.pclass[p] = (uint8_t)c;
+        }
+        if (ncls <= 8) {
+            b.cost_mode = COST_CLASS;
+        } else {
+            free(b.pclass);
+            b.pclass = NULL;
+        }
+    }
+
+    /* the root's events, made in primitive order, then sorted once */
+    const size_t m = 2 * n;
+    for (unsigned k = 0; k < 3; k++) {
+        uint64_t *e = b.ev + k * m;
+        size_t i = 0;
+        for (uint32_t p = 0; p < np; p++) {
+            if (scene->prims[p].shape == SHAPE_NONE)
+                continue;
+            bsp_box pb = kd_prim_box(t, scene, p);
+            uint64_t cls = b.pclass ? (uint64_t)b.pclass[p] << EV_CLASS_SHIFT : 0;
+            e[i++] = make_event(round_down(pb.lo.v[k]), 1, p) | cls;
+            e[i++] = make_event(round_up(pb.hi.v[k]), 0, p) | cls;
+        }
+        radix_sort(e, b.ev + 3 * m, m);
+    }
+    double tsum = 0.0, cost;
+    for (uint32_t p = 0; p < np; p++)
+        if (scene->prims[p].shape != SHAPE_NONE)
+            tsum += b.cost ? (double)b.cost[p] : b.unif;
+    node_lists root = {0, m, n, tsum};
+    st = build_node(&b, 0, t->box, root, 3 * m, 0, 0, &cost);
+done:
+    free(b.cls);
+    free(b.ev);
+    free(b.cost);
+    free(b.nev[0]);
+    free(b.nev[1]);
+    free(b.list);
+    free(b.pclass);
+    kd_clip_scratch_free(&b.clip);
+    return st;
+}
+
+bsp_status kd_build_sah(kd_tree *t, const bsp_scene *scene, const bsp_build_options *o,
+                        bsp_error *err)
+{
+    return kd_build_sah_measure(t, scene, o, kd_area_surface, NULL, err);
+}

@@ -1,0 +1,943 @@
+/*
+ * test_kd_sah.c — the SAH kd-tree builder (src/accel/kd_split_sah.c), its
+ * cost model (kd_cost.c) and split clipping (kd_clip.c).
+ *
+ * - hand-computed cases: empty space is cut off exactly at a primitive's
+ *   padded float bounds; two clusters are split between them; the expected
+ *   cost of bsp_accel_tree_stats against a hand computation; the root plane
+ *   against a brute-force evaluation of every candidate on random scenes;
+ * - exactness: for every SPD file, generated SPD scenes and stress scenes
+ *   (primitives lying in split planes, long thin triangles, a cluster in a
+ *   huge shell, a 1e6 offset, duplicates, degenerate primitives, concave
+ *   polygons, shared vertices), bsp_accel_check passes and seeded rays get
+ *   the naive method's primitive and bit-identical t, and its occlusion
+ *   answer, with the mailbox on and off (also in the paper's setting, and
+ *   through the pluggable measure with a non-inlined area function);
+ * - clipping is conservative (sampled points of the primitive inside the box
+ *   lie inside the clipped bounds) and tight;
+ * - two builds give identical node arrays; calibration gives sane figures;
+ * - a scaling report of build time per primitive at ~1e4, 1e5, 1e6.
+ *
+ * BSPRAY_TEST_QUICK=1 (the sanitizer run) scales the work down.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "accel/kd_clip.h"
+#include "accel/kd_cost.h"
+#include "accel/kd_tree.h"
+#include "bspray/bspray.h"
+#include "geom/vec.h"
+#include "harness.h"
+
+static int quick(void)
+{
+    const char *q = getenv("BSPRAY_TEST_QUICK");
+    return q && *q && *q != '0';
+}
+
+static uint64_t rng_state;
+static double rnd(void)
+{
+    rng_state ^= rng_state >> 12;
+    rng_state ^= rng_state << 25;
+    rng_state ^= rng_state >> 27;
+    return (double)((rng_state * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+}
+static double rnd_in(double lo, double hi)
+{
+    return lo + (hi - lo) * rnd();
+}
+
+static bsp_build_options sah_options(void)
+{
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_SAH;
+    return o;
+}
+
+static bsp_accel *build(const bsp_scene *s, const bsp_build_options *o)
+{
+    bsp_accel *a = NULL;
+    bsp_error err;
+    bsp_status st = bsp_accel_build(s, o, &a, &err);
+    CHECK_MSG(st == BSP_OK, "build: %s", err.message);
+    if (st != BSP_OK)
+        harness_abort_test();
+    st = bsp_accel_check(a, &err);
+    CHECK_MSG(st == BSP_OK, "invariant: %s", err.message);
+    return a;
+}
+
+static const kd_tree *tree_of(const bsp_accel *a)
+{
+    return a->impl;
+}
+
+static void add_sphere(bsp_scene *s, bsp_vec3 c, double r)
+{
+    bsp_error err;
+    REQUIRE(bsp_scene_add_sphere(s, c, r, &err) == BSP_OK);
+}
+
+static void add_poly(bsp_scene *s, const bsp_vec3 *v, size_t n)
+{
+    bsp_error err;
+    REQUIRE(bsp_scene_add_polygon(s, v, n, &err) == BSP_OK);
+}
+
+static void add_tri(bsp_scene *s, bsp_vec3 a, bsp_vec3 b, bsp_vec3 c)
+{
+    bsp_vec3 v[3] = {a, b, c};
+    add_poly(s, v, 3);
+}
+
+static void add_quad(bsp_scene *s, bsp_vec3 a, bsp_vec3 b, bsp_vec3 c, bsp_vec3 d)
+{
+    bsp_vec3 v[4] = {a, b, c, d};
+    add_poly(s, v, 4);
+}
+
+/* The largest float <= x and the smallest float >= x, as the builder rounds
+ * padded bounds. */
+static double float_down(double x)
+{
+    float f = (float)x;
+    if ((double)f > x)
+        f = nextafterf(f, -INFINITY);
+    return (double)f;
+}
+static double float_up(double x)
+{
+    float f = (float)x;
+    if ((double)f < x)
+        f = nextafterf(f, INFINITY);
+    return (double)f;
+}
+
+/* The cell of the leaf holding primitive P (the first one found). */
+static int find_leaf_cell(const kd_tree *t, uint32_t i, bsp_box cell, uint32_t p, bsp_box *out)
+{
+    const kd_node *n = &t->nodes[i];
+    if (kd_is_leaf(n)) {
+        for (uint32_t k = 0; k < kd_count(n); k++)
+            if (t->prims[n->u.first + k] == p) {
+                *out = cell;
+                return 1;
+            }
+        return 0;
+    }
+    bsp_box l = cell, r = cell;
+    l.hi.v[kd_axis(n)] = r.lo.v[kd_axis(n)] = (double)n->u.split;
+    return find_leaf_cell(t, kd_child(n), l, p, out) ||
+           find_leaf_cell(t, kd_child(n) + 1, r, p, out);
+}
+
+/* --- hand-computed cases ----------------------------------------------------------------- */
+
+/* Two small spheres side by side in a huge node (a far quad widens the root
+ * box in y and z): the empty space around them is cut off exactly at their
+ * padded bounds, rounded outward to floats. */
+TEST(sah_cuts_off_empty_space_at_the_bound)
+{
+    bsp_scene *s = bsp_scene_create();
+    add_sphere(s, bsp_v3(0, 0, 0), 0.5);
+    add_sphere(s, bsp_v3(2, 0, 0), 0.5);
+    add_quad(s, bsp_v3(100, -50, -50), bsp_v3(100, 50, -50), bsp_v3(100, 50, 50),
+             bsp_v3(100, -50, 50));
+    bsp_build_options o = sah_options();
+    bsp_accel *a = build(s, &o);
+    const kd_tree *t = tree_of(a);
+    double pad = t->pad;
+    for (uint32_t p = 0; p < 2; p++) {
+        bsp_box cell;
+        REQUIRE(find_leaf_cell(t, 0, t->box, p, &cell));
+        for (int k = 1; k < 3; k++) {
+            CHECK_MSG(cell.lo.v[k] == float_down(-0.5 - pad) && cell.hi.v[k] == float_up(0.5 + pad),
+                      "sphere %u: leaf cell on axis %d is [%.17g, %.17g], want [%.17g, %.17g]", p,
+                      k, cell.lo.v[k], cell.hi.v[k], float_down(-0.5 - pad), float_up(0.5 + pad));
+        }
+        /* on x the leaf hugs the sphere on its outer side */
+        if (p == 0)
+            CHECK(cell.lo.v[0] <= -0.5 - pad && cell.lo.v[0] >= float_down(-0.5 - pad));
+    }
+    /* the quad's leaf: a thin slab around x = 100 */
+    bsp_box qc;
+    REQUIRE(find_leaf_cell(t, 0, t->box, 2, &qc));
+    CHECK(qc.lo.v[0] == float_down(100 - pad));
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}
+
+/* Two separated clusters: the root plane lies on x between them. */
+TEST(sah_splits_between_two_clusters)
+{
+    bsp_scene *s = bsp_scene_create();
+    rng_state = 11;
+    for (int i = 0; i < 40; i++)
+        add_sphere(s, bsp_v3(rnd_in(0.1, 0.9), rnd_in(0.1, 0.9), rnd_in(0.1, 0.9)), 0.1);
+    for (int i = 0; i < 40; i++)
+        add_sphere(s, bsp_v3(rnd_in(10.1, 10.9), rnd_in(0.1, 0.9), rnd_in(0.1, 0.9)), 0.1);
+    bsp_build_options o = sah_options();
+    bsp_accel *a = build(s, &o);
+    const kd_tree *t = tree_of(a);
+    const kd_node *root = &t->nodes[0];
+    REQUIRE(!kd_is_leaf(root));
+    CHECK_EQ_INT(kd_axis(root), 0);
+    /* any plane with all of A left and all of B right costs the same (equal
+     * counts: the cost does not depend on the position), so the first, at
+     * A's padded upper bound, is taken */
+    double a_hi = -INFINITY, b_lo = INFINITY;
+    for (uint32_t p = 0; p < 80; p++) {
+        bsp_box pb = kd_prim_box(t, s, p);
+        if (p < 40)
+            a_hi = fmax(a_hi, float_up(pb.hi.x));
+        else
+            b_lo = fmin(b_lo, float_down(pb.lo.x));
+    }
+    double sp = (double)root->u.split;
+    CHECK_MSG(sp == a_hi && sp < b_lo, "root split at %.9g, A ends at %.9g, B starts at %.9g", sp,
+              a_hi, b_lo);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}
+
+/* Two unit-diameter spheres 10 apart, T_sphere = 4, C_trav = 1: the split
+ * at a sphere's bound (1 + 4 (6 + 42) / 46 = 5.17 < leaf 8) makes two leaves;
+ * the tree's expected cost (traversal 1, intersection 1) is
+ * 1 + (6 * 1 + 42 * 1) / 46, up to the padding. */
+TEST(sah_expected_cost_matches_hand_computation)
+{
+    bsp_scene *s = bsp_scene_create();
+    add_sphere(s, bsp_v3(0, 0, 0), 0.5);
+    add_sphere(s, bsp_v3(10, 0, 0), 0.5);
+    bsp_build_options o = sah_options();
+    memset(&o.sah_costs, 0, sizeof o.sah_costs);
+    o.sah_costs.traversal = 1;
+    o.sah_costs.sphere = 4;
+    bsp_accel *a = build(s, &o);
+    bsp_tree_stats st;
+    bsp_accel_tree_stats(a, &st);
+    CHECK_EQ_INT(st.interior_nodes, 1);
+    CHECK_EQ_INT(st.leaves, 2);
+    CHECK_EQ_INT(st.references, 2);
+    CHECK_NEAR(st.expected_cost, 1.0 + 48.0 / 46.0, 1e-5);
+    const kd_tree *t = tree_of(a);
+    CHECK_EQ_INT(kd_axis(&t->nodes[0]), 0);
+    /* with T_sphere = 1 the split costs 1 + 48/46 > 2: one leaf */
+    bsp_accel_destroy(a);
+    o.sah_costs.sphere = 1;
+    a = build(s, &o);
+    bsp_accel_tree_stats(a, &st);
+    CHECK_EQ_INT(st.interior_nodes, 0);
+    CHECK_EQ_INT(st.references, 2);
+    CHECK_NEAR(st.expected_cost, 2.0, 1e-12);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}
+
+/* The cost of the plane a brute force finds best, evaluating every candidate
+ * (each primitive's padded float bounds on each axis, strictly inside the
+ * root box) with the classification rule written out (left: lo < s, right:
+ * hi > s) — independent of the event machinery. */
+typedef struct bf_prim {
+    bsp_box box; /* padded bounds rounded outward to floats */
+    double cost;
+} bf_prim;
+
+static double bf_cost(const bf_prim *ps, size_t n, bsp_box cell, int axis, double s,
+                      const kd_cost_model *m)
+{
+    double tl = 0, tr = 0;
+    size_t nl = 0, nr = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (ps[i].box.lo.v[axis] < s) {
+            tl += ps[i].cost;
+            nl++;
+        }
+        if (ps[i].box.hi.v[axis] > s) {
+            tr += ps[i].cost;
+            nr++;
+        }
+    }
+    bsp_box l = cell, r = cell;
+    l.hi.v[axis] = r.lo.v[axis] = s;
+    double c = m->c.traversal +
+               (kd_surface_area(&l) * tl + kd_surface_area(&r) * tr) / kd_surface_area(&cell);
+    if (nl == 0 || nr == 0)
+        c *= 1.0 - m->empty_bonus;
+    return c;
+}
+
+TEST(sah_root_plane_is_the_brute_force_optimum)
+{
+    int checked = 0;
+    for (int trial = 0; trial < 40; trial++) {
+        bsp_scene *s = bsp_scene_create();
+        rng_state = 1000 + (uint64_t)trial;
+        int n = 5 + (int)(rnd() * 40);
+        for (int i = 0; i < n; i++) {
+            bsp_vec3 c = bsp_v3(rnd_in(-5, 5), rnd_in(-5, 5), rnd_in(-5, 5));
+            double u = rnd();
+            if (u < 0.4) {
+                add_sphere(s, c, rnd_in(0.05, 1.5));
+            } else if (u < 0.8) {
+                add_tri(s, c, v3_add(c, bsp_v3(rnd_in(-2, 2), rnd_in(-2, 2), rnd_in(-2, 2))),
+                        v3_add(c, bsp_v3(rnd_in(-2, 2), rnd_in(-2, 2), rnd_in(-2, 2))));
+            } else {
+                double h = rnd_in(0.2, 2);
+                add_quad(s, c, v3_add(c, bsp_v3(h, 0, 0)), v3_add(c, bsp_v3(h, h, 0)),
+                         v3_add(c, bsp_v3(0, h, 0)));
+            }
+        }
+        bsp_build_options o = sah_options();
+        o.max_leaf_prims = 1;
+        bsp_accel *a = build(s, &o);
+        const kd_tree *t = tree_of(a);
+        kd_cost_model m;
+        kd_cost_resolve(&o, &m);
+        bf_prim ps[64];
+        for (int i = 0; i < n; i++) {
+            bsp_box b = kd_prim_box(t, s, (uint32_t)i);
+            for (int k = 0; k < 3; k++) {
+                ps[i].box.lo.v[k] = float_down(b.lo.v[k]);
+                ps[i].box.hi.v[k] = float_up(b.hi.v[k]);
+            }
+            ps[i].cost = kd_prim_cost(s, (uint32_t)i, &m.c);
+        }
+        double best = INFINITY;
+        for (int i = 0; i < n; i++)
+            for (int k = 0; k < 3; k++)
+                for (int side = 0; side < 2; side++) {
+                    double sp = side ? ps[i].box.hi.v[k] : ps[i].box.lo.v[k];
+                    if (sp > t->box.lo.v[k] && sp < t->box.hi.v[k])
+                        best = fmin(best, bf_cost(ps, (size_t)n, t->box, k, sp, &m));
+                }
+        double leaf = 0;
+        for (int i = 0; i < n; i++)
+            leaf += ps[i].cost;
+        const kd_node *root = &t->nodes[0];
+        if (best < leaf) {
+            REQUIRE(!kd_is_leaf(root));
+            double got = bf_cost(ps, (size_t)n, t->box, (int)kd_axis(root),
+                                 (double)root->u.split, &m);
+            CHECK_MSG(got <= best * (1 + 1e-12), "trial %d: root plane costs %.17g, best %.17g",
+                      trial, got, best);
+            checked++;
+        }
+        bsp_accel_destroy(a);
+        bsp_scene_destroy(s);
+    }
+    CHECK(checked >= 30);
+}
+
+/* The paper's setting (depth 18, 2 per leaf) is reachable through the options;
+ * the default depth is round(8 + 1.3 log2 N). */
+TEST(sah_limits_from_options)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load("spd:balls:3", &s, &err) == BSP_OK);
+    bsp_build_options o = sah_options();
+    o.max_depth = 18;
+    o.max_leaf_prims = 2;
+    bsp_accel *a = build(s, &o);
+    bsp_tree_stats st;
+    bsp_accel_tree_stats(a, &st);
+    CHECK(st.max_leaf_depth <= 18);
+    CHECK_EQ_INT(tree_of(a)->max_depth, 18);
+    CHECK_EQ_INT(tree_of(a)->max_leaf_prims, 2);
+    bsp_accel_destroy(a);
+    o = sah_options();
+    a = build(s, &o);
+    size_t n = bsp_scene_prim_count(s);
+    CHECK_EQ_INT(tree_of(a)->max_depth, lround(8 + 1.3 * log2((double)n)));
+    CHECK_EQ_INT(tree_of(a)->max_leaf_prims, 1);
+    bsp_accel_destroy(a);
+    o = sah_options();
+    o.max_depth = 3;
+    a = build(s, &o);
+    bsp_accel_tree_stats(a, &st);
+    CHECK(st.max_leaf_depth <= 3);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}
+
+TEST(sah_kind_name_and_defaults)
+{
+    bsp_accel_kind k;
+    bsp_error err;
+    REQUIRE(bsp_accel_kind_parse("sah", &k, &err) == BSP_OK);
+    CHECK_EQ_INT(k, BSP_ACCEL_SAH);
+    CHECK(strcmp(bsp_accel_kind_name(BSP_ACCEL_SAH), "sah") == 0);
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    CHECK(o.sah_costs.traversal > 0 && o.sah_costs.sphere > 0 && o.sah_costs.triangle > 0 &&
+          o.sah_costs.polygon_base > 0 && o.sah_costs.polygon_vertex > 0 && o.sah_costs.cone > 0);
+    CHECK(o.sah_empty_bonus > 0 && o.sah_empty_bonus < 1);
+    /* zero fields mean the defaults */
+    bsp_build_options z;
+    memset(&z, 0, sizeof z);
+    kd_cost_model m;
+    kd_cost_resolve(&z, &m);
+    CHECK(m.c.traversal == o.sah_costs.traversal && m.c.sphere == o.sah_costs.sphere);
+    CHECK(m.empty_bonus == KD_DEFAULT_EMPTY_BONUS);
+    z.sah_empty_bonus = -1;
+    kd_cost_resolve(&z, &m);
+    CHECK(m.empty_bonus == 0.0);
+}
+
+/* --- exactness against the naive method ---------------------------------------------------------- */
+
+static int same_hit(int f1, const bsp_hit *a, int f2, const bsp_hit *b)
+{
+    if (f1 != f2)
+        return 0;
+    return !f1 || (a->prim == b->prim && a->t == b->t);
+}
+
+static bsp_ray random_ray(bsp_box box)
+{
+    bsp_ray r;
+    bsp_vec3 c = v3_scale(v3_add(box.lo, box.hi), 0.5), half = v3_scale(v3_sub(box.hi, box.lo), 0.5);
+    int inside = rnd() < 0.5;
+    for (int k = 0; k < 3; k++) {
+        double h = half.v[k] > 0 ? half.v[k] : 1.0;
+        r.org.v[k] = inside ? rnd_in(box.lo.v[k], box.hi.v[k]) : c.v[k] + rnd_in(-1.5, 1.5) * h;
+        r.dir.v[k] = rnd_in(-1, 1);
+    }
+    double v = rnd();
+    if (v < 0.15) { /* axis-aligned */
+        int axis = (int)(rnd() * 3) % 3;
+        for (int k = 0; k < 3; k++)
+            r.dir.v[k] = k == axis ? (rnd() < 0.5 ? -1.0 : 1.0) : 0.0;
+    } else if (v < 0.30) { /* one zero component */
+        r.dir.v[(int)(rnd() * 3) % 3] = 0.0;
+    }
+    r.tmin = 0.0;
+    r.tmax = INFINITY;
+    return r;
+}
+
+/* Rays that start exactly on the tree's split planes (and run in them). */
+static bsp_ray plane_ray(const kd_tree *t, bsp_box box)
+{
+    bsp_ray r = random_ray(box);
+    uint32_t i = (uint32_t)(rnd() * t->nnodes) % t->nnodes;
+    const kd_node *n = &t->nodes[i];
+    if (!kd_is_leaf(n)) {
+        unsigned axis = kd_axis(n);
+        r.org.v[axis] = (double)n->u.split;
+        if (rnd() < 0.5)
+            r.dir.v[axis] = 0.0;
+        if (r.dir.x == 0 && r.dir.y == 0 && r.dir.z == 0)
+            r.dir.v[(axis + 1) % 3] = 1.0;
+    }
+    return r;
+}
+
+/* Compares A (and a mailbox-less twin built with the same options) with the
+ * naive method on NRAYS seeded rays. */
+static void check_exact_accel(const bsp_scene *s, const char *name, bsp_accel *const acc[2],
+                              int nrays, uint64_t seed)
+{
+    bsp_error err;
+    bsp_accel *naive = NULL;
+    REQUIRE(bsp_accel_build(s, NULL, &naive, &err) == BSP_OK);
+    bsp_query *nq = bsp_query_create(naive), *q[2];
+    for (int v = 0; v < 2; v++)
+        q[v] = bsp_query_create(acc[v]);
+    bsp_box box = bsp_scene_bounds(s);
+    if (box_is_empty(box)) {
+        box.lo = bsp_v3(-1, -1, -1);
+        box.hi = bsp_v3(1, 1, 1);
+    }
+    rng_state = seed;
+    int bad = 0, hits = 0;
+    for (int i = 0; i < nrays && bad < 5; i++) {
+        bsp_ray r = rnd() < 0.1 ? plane_ray(tree_of(acc[0]), box) : random_ray(box);
+        if (r.dir.x == 0 && r.dir.y == 0 && r.dir.z == 0)
+            r.dir.x = 1;
+        bsp_hit hn, hk;
+        int fn = bsp_intersect(naive, nq, &r, &hn);
+        int on = bsp_occluded(naive, nq, &r);
+        hits += fn;
+        for (int v = 0; v < 2; v++) {
+            int fk = bsp_intersect(acc[v], q[v], &r, &hk);
+            int ok = bsp_occluded(acc[v], q[v], &r);
+            if (!same_hit(fn, &hn, fk, &hk) || ok != on) {
+                bad++;
+                harness_fail(__FILE__, __LINE__,
+                             "%s (mailbox %d) ray %d (%.17g %.17g %.17g  %.17g %.17g %.17g): naive "
+                             "%d prim %u t %.17g occl %d; sah %d prim %u t %.17g occl %d",
+                             name, v == 0, i, r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y,
+                             r.dir.z, fn, fn ? hn.prim : 0, fn ? hn.t : 0.0, on, fk,
+                             fk ? hk.prim : 0, fk ? hk.t : 0.0, ok);
+            }
+        }
+    }
+    if (bsp_scene_prim_count(s) > bsp_scene_kind_count(s, BSP_PRIM_DROPPED))
+        CHECK_MSG(hits > nrays / 50, "%s: only %d of %d rays hit", name, hits, nrays);
+    for (int v = 0; v < 2; v++)
+        bsp_query_destroy(q[v]);
+    bsp_query_destroy(nq);
+    bsp_accel_destroy(naive);
+}
+
+static void check_exact_opts(const bsp_scene *s, const char *name, bsp_build_options o, int nrays,
+                             uint64_t seed)
+{
+    bsp_accel *acc[2];
+    o.mailbox = 1;
+    acc[0] = build(s, &o);
+    o.mailbox = 0;
+    acc[1] = build(s, &o);
+    check_exact_accel(s, name, acc, nrays, seed);
+    bsp_accel_destroy(acc[0]);
+    bsp_accel_destroy(acc[1]);
+}
+
+static int ray_count(int full)
+{
+    return quick() ? full / 10 : full;
+}
+
+static void check_exact(const bsp_scene *s, const char *name, uint64_t seed)
+{
+    check_exact_opts(s, name, sah_options(), ray_count(20000), seed);
+}
+
+static void check_spd(const char *file, uint64_t seed)
+{
+    const char *shared = harness_shared_dir();
+    if (!shared)
+        harness_skip("../shared is absent: SPD reference scenes not checked");
+    char path[1024];
+    snprintf(path, sizeof path, "%s/scenes/spd/%s", shared, file);
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load(path, &s, &err) == BSP_OK);
+    check_exact(s, file, seed);
+    bsp_scene_destroy(s);
+}
+
+#define SAH_SPD_TEST(name, file, seed)                                                           \
+    TEST(sah_exact_spd_##name)                                                                   \
+    {                                                                                            \
+        check_spd(file, seed);                                                                   \
+    }
+
+SAH_SPD_TEST(balls, "balls.nff", 21)
+SAH_SPD_TEST(gears, "gears.nff", 22)
+SAH_SPD_TEST(mount, "mount.nff", 23)
+SAH_SPD_TEST(rings, "rings.nff", 24)
+SAH_SPD_TEST(teapot, "teapot.nff", 25)
+SAH_SPD_TEST(teapot_s12, "teapot-s12.nff", 26)
+SAH_SPD_TEST(tetra, "tetra.nff", 27)
+SAH_SPD_TEST(tree, "tree.nff", 28)
+SAH_SPD_TEST(lattice, "lattice.nff", 29)
+SAH_SPD_TEST(shells, "shells.nff", 30)
+SAH_SPD_TEST(jacks, "jacks.nff", 31)
+SAH_SPD_TEST(sombrero, "sombrero.nff", 32)
+SAH_SPD_TEST(sample, "sample.nff", 33)
+SAH_SPD_TEST(nurbtst, "nurbtst.nff", 34)
+
+TEST(sah_exact_generated_spd)
+{
+    const char *specs[] = {"spd:balls:2", "spd:tree:6", "spd:rings:2", "spd:gears:1",
+                           "spd:tetra:4", "spd:mount:3", "spd:lattice:3", "spd:shells:3"};
+    for (size_t i = 0; i < sizeof specs / sizeof specs[0]; i++) {
+        bsp_scene *s = NULL;
+        bsp_error err;
+        REQUIRE(bsp_scene_load(specs[i], &s, &err) == BSP_OK);
+        check_exact(s, specs[i], 200 + i);
+        bsp_scene_destroy(s);
+    }
+}
+
+/* The paper's setting and a few cost models: other trees, same answers. */
+TEST(sah_exact_other_settings)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load("spd:balls:2", &s, &err) == BSP_OK);
+    bsp_build_options o = sah_options();
+    o.max_depth = 18;
+    o.max_leaf_prims = 2;
+    check_exact_opts(s, "balls paper setting", o, ray_count(10000), 301);
+    o = sah_options();
+    o.sah_empty_bonus = -1;
+    o.sah_costs.traversal = 5;
+    check_exact_opts(s, "balls no bonus, expensive traversal", o, ray_count(10000), 302);
+    o = sah_options();
+    o.sah_empty_bonus = 0.9;
+    o.sah_costs.sphere = 100;
+    check_exact_opts(s, "balls big bonus, expensive spheres", o, ray_count(10000), 303);
+    bsp_scene_destroy(s);
+}
+
+/* A measure through the function pointer (not the inlined surface area):
+ * twice the surface area, so only rounding can make the tree differ. CTX
+ * counts the calls. */
+static double area_twice(const bsp_box *b, const void *ctx)
+{
+    (*(long *)(uintptr_t)ctx)++;
+    return 2.0 * kd_surface_area(b);
+}
+
+TEST(sah_pluggable_measure)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load("spd:rings:2", &s, &err) == BSP_OK);
+    bsp_build_options o = sah_options();
+    bsp_accel *acc[2];
+    bsp_tree_stats plain, twice;
+    for (int v = 0; v < 2; v++) {
+        o.mailbox = v == 0;
+        acc[v] = build(s, &o);
+        bsp_accel_tree_stats(acc[v], &plain);
+        kd_tree *t = acc[v]->impl;
+        kd_tree_free(t);
+        REQUIRE(kd_tree_init(t, s, acc[v]->opts.max_depth, acc[v]->opts.max_leaf_prims));
+        long calls = 0;
+        REQUIRE(kd_build_sah_measure(t, s, &acc[v]->opts, area_twice, &calls, &err) == BSP_OK);
+        CHECK(calls > 2 * (long)bsp_scene_prim_count(s));
+        REQUIRE(bsp_accel_check(acc[v], &err) == BSP_OK);
+        bsp_accel_tree_stats(acc[v], &twice);
+    }
+    CHECK_NEAR(twice.expected_cost, plain.expected_cost, 0.01 * plain.expected_cost);
+    check_exact_accel(s, "rings, measure by pointer", acc, ray_count(10000), 304);
+    bsp_accel_destroy(acc[0]);
+    bsp_accel_destroy(acc[1]);
+    bsp_scene_destroy(s);
+}
+
+/* --- stress scenes ------------------------------------------------------------------------- */
+
+/* Axis-aligned squares on a grid of planes: every candidate plane holds
+ * primitives, and splits at c and c +- pad all occur. */
+TEST(sah_exact_stress_squares_in_planes)
+{
+    bsp_scene *s = bsp_scene_create();
+    for (int i = 0; i <= 12; i += 2)
+        for (int j = 0; j < 12; j += 3)
+            for (int axis = 0; axis < 3; axis++) {
+                bsp_vec3 p[4];
+                for (int k = 0; k < 4; k++) {
+                    double u = (k == 1 || k == 2) ? j + 2 : j, v = k >= 2 ? j + 2 : j, co[3];
+                    co[axis] = i;
+                    co[(axis + 1) % 3] = u;
+                    co[(axis + 2) % 3] = v;
+                    p[k] = bsp_v3(co[0], co[1], co[2]);
+                }
+                add_poly(s, p, 4);
+            }
+    /* and triangles in the same planes, sharing edges with the squares */
+    for (int i = 0; i <= 12; i += 4)
+        add_tri(s, bsp_v3(i, 0, 0), bsp_v3(i, 2, 0), bsp_v3(i, 0, 2));
+    check_exact(s, "squares in planes", 401);
+    bsp_scene_destroy(s);
+}
+
+TEST(sah_exact_stress_long_thin_triangles)
+{
+    bsp_scene *s = bsp_scene_create();
+    rng_state = 402;
+    for (int i = 0; i < 150; i++) {
+        bsp_vec3 a = bsp_v3(rnd_in(-50, -40), rnd_in(-50, 50), rnd_in(-50, 50));
+        bsp_vec3 b = bsp_v3(rnd_in(40, 50), rnd_in(-50, 50), rnd_in(-50, 50));
+        add_tri(s, a, b, v3_add(b, bsp_v3(rnd_in(-0.01, 0.01), rnd_in(-0.01, 0.01), 0.02)));
+    }
+    for (int i = 0; i < 300; i++)
+        add_sphere(s, bsp_v3(rnd_in(-45, 45), rnd_in(-45, 45), rnd_in(-45, 45)), rnd_in(0.2, 3));
+    check_exact(s, "long thin triangles", 402);
+    bsp_scene_destroy(s);
+}
+
+/* A dense cluster of spheres and cones inside a huge sparse shell of quads
+ * and a sphere enclosing everything (cells inside it drop it). */
+TEST(sah_exact_stress_cluster_in_huge_shell)
+{
+    bsp_scene *s = bsp_scene_create();
+    bsp_error err;
+    rng_state = 403;
+    double R = 1000;
+    add_quad(s, bsp_v3(-R, -R, -R), bsp_v3(R, -R, -R), bsp_v3(R, R, -R), bsp_v3(-R, R, -R));
+    add_quad(s, bsp_v3(-R, -R, R), bsp_v3(-R, R, R), bsp_v3(R, R, R), bsp_v3(R, -R, R));
+    add_quad(s, bsp_v3(-R, -R, -R), bsp_v3(-R, R, -R), bsp_v3(-R, R, R), bsp_v3(-R, -R, R));
+    add_sphere(s, bsp_v3(0, 0, 0), 900);
+    for (int i = 0; i < 500; i++)
+        add_sphere(s, bsp_v3(rnd_in(-1, 1), rnd_in(-1, 1), rnd_in(-1, 1)), rnd_in(0.01, 0.08));
+    for (int i = 0; i < 100; i++) {
+        bsp_vec3 b = bsp_v3(rnd_in(-1, 1), rnd_in(-1, 1), rnd_in(-1, 1));
+        bsp_vec3 a = v3_add(b, bsp_v3(rnd_in(-0.3, 0.3), rnd_in(-0.3, 0.3), rnd_in(-0.3, 0.3)));
+        REQUIRE(bsp_scene_add_cone(s, b, rnd_in(0.01, 0.05), a, rnd_in(0, 0.05), &err) ==
+                BSP_OK);
+    }
+    check_exact(s, "cluster in huge shell", 403);
+    bsp_scene_destroy(s);
+}
+
+/* Content a million units from the origin: float planes are coarse there
+ * (1/16), the padding is 0.1. */
+TEST(sah_exact_stress_far_from_origin)
+{
+    bsp_scene *s = bsp_scene_create();
+    rng_state = 404;
+    bsp_vec3 off = bsp_v3(1e6, -2e6, 3e6);
+    for (int i = 0; i < 300; i++) {
+        bsp_vec3 c = v3_add(off, bsp_v3(rnd_in(-20, 20), rnd_in(-20, 20), rnd_in(-20, 20)));
+        if (i % 2)
+            add_sphere(s, c, rnd_in(0.05, 1));
+        else
+            add_tri(s, c, v3_add(c, bsp_v3(rnd_in(-2, 2), rnd_in(-2, 2), 0)),
+                    v3_add(c, bsp_v3(0, rnd_in(-2, 2), rnd_in(-2, 2))));
+    }
+    /* axis-aligned squares at integer offsets: in-plane primitives far out */
+    for (int i = 0; i < 10; i++) {
+        bsp_vec3 c = v3_add(off, bsp_v3(i * 2.0, 0, 0));
+        add_quad(s, c, v3_add(c, bsp_v3(0, 3, 0)), v3_add(c, bsp_v3(0, 3, 3)),
+                 v3_add(c, bsp_v3(0, 0, 3)));
+    }
+    check_exact(s, "far from origin", 404);
+    bsp_scene_destroy(s);
+}
+
+/* Duplicates (ties at equal t: the lowest index wins), degenerate primitives
+ * that are dropped, coincident spheres, a concave polygon, shared vertices. */
+TEST(sah_exact_stress_duplicates_and_degenerates)
+{
+    bsp_scene *s = bsp_scene_create();
+    bsp_error err;
+    rng_state = 405;
+    for (int d = 0; d < 5; d++) {
+        add_tri(s, bsp_v3(0, 0, 0), bsp_v3(4, 0, 0), bsp_v3(0, 4, 0));
+        add_sphere(s, bsp_v3(3, 3, 3), 1);
+        add_quad(s, bsp_v3(0, 0, 2), bsp_v3(4, 0, 2), bsp_v3(4, 4, 2), bsp_v3(0, 4, 2));
+    }
+    add_sphere(s, bsp_v3(1, 1, 1), 0); /* degenerate: dropped */
+    add_tri(s, bsp_v3(0, 0, 0), bsp_v3(1, 1, 1), bsp_v3(2, 2, 2));
+    REQUIRE(bsp_scene_add_cone(s, bsp_v3(1, 1, 1), 1, bsp_v3(1, 1, 1), 1, &err) == BSP_OK);
+    /* a concave comb */
+    bsp_vec3 comb[12];
+    for (int i = 0; i < 6; i++) {
+        comb[i] = bsp_v3(i, (i % 2) ? 1 : 4, -1);
+        comb[11 - i] = bsp_v3(i, 0, -1);
+    }
+    add_poly(s, comb, 12);
+    /* a fan of triangles sharing a vertex on likely split planes */
+    for (int i = 0; i < 16; i++) {
+        double a0 = 2 * BSP_PI * i / 16, a1 = 2 * BSP_PI * (i + 1) / 16;
+        add_tri(s, bsp_v3(6, 6, 6), bsp_v3(6 + 2 * cos(a0), 6 + 2 * sin(a0), 6),
+                bsp_v3(6 + 2 * cos(a1), 6 + 2 * sin(a1), 6));
+    }
+    for (int i = 0; i < 100; i++)
+        add_sphere(s, bsp_v3(rnd_in(-2, 8), rnd_in(-2, 8), rnd_in(-2, 8)), rnd_in(0.05, 0.4));
+    CHECK(bsp_scene_kind_count(s, BSP_PRIM_DROPPED) == 3);
+    check_exact(s, "duplicates and degenerates", 405);
+    bsp_scene_destroy(s);
+}
+
+/* Scenes with almost nothing in them. */
+TEST(sah_exact_tiny_scenes)
+{
+    bsp_scene *s = bsp_scene_create();
+    bsp_build_options o = sah_options();
+    bsp_accel *a = build(s, &o); /* empty */
+    bsp_hit h;
+    bsp_query *q = bsp_query_create(a);
+    bsp_ray r = {bsp_v3(0, 0, 0), bsp_v3(1, 0, 0), 0, INFINITY};
+    CHECK(!bsp_intersect(a, q, &r, &h));
+    bsp_query_destroy(q);
+    bsp_accel_destroy(a);
+    add_sphere(s, bsp_v3(0, 0, 0), 1);
+    check_exact(s, "one sphere", 406);
+    add_tri(s, bsp_v3(-1, -1, 0), bsp_v3(1, -1, 0), bsp_v3(0, 1, 0));
+    check_exact(s, "sphere and triangle", 407);
+    bsp_scene_destroy(s);
+}
+
+/* --- clipping ------------------------------------------------------------------------------------ */
+
+/* Points of triangle P sampled densely, including its edges. */
+static bsp_vec3 tri_point(const bsp_vec3 *v, double u, double w)
+{
+    return v3_add(v[0], v3_add(v3_scale(v3_sub(v[1], v[0]), u), v3_scale(v3_sub(v[2], v[0]), w)));
+}
+
+static int in_box(bsp_vec3 p, const bsp_box *b)
+{
+    for (int k = 0; k < 3; k++)
+        if (p.v[k] < b->lo.v[k] || p.v[k] > b->hi.v[k])
+            return 0;
+    return 1;
+}
+
+TEST(sah_clip_is_conservative_and_tight)
+{
+    rng_state = 501;
+    kd_clip_scratch scr;
+    memset(&scr, 0, sizeof scr);
+    int nonempty = 0;
+    for (int trial = 0; trial < (quick() ? 50 : 300); trial++) {
+        bsp_scene *s = bsp_scene_create();
+        bsp_vec3 v[3];
+        for (int i = 0; i < 3; i++)
+            v[i] = bsp_v3(rnd_in(-3, 3), rnd_in(-3, 3), rnd_in(-3, 3));
+        add_tri(s, v[0], v[1], v[2]);
+        bsp_vec3 c = bsp_v3(rnd_in(-3, 3), rnd_in(-3, 3), rnd_in(-3, 3));
+        double rad = rnd_in(0.1, 2);
+        add_sphere(s, c, rad);
+        bsp_box box;
+        for (int k = 0; k < 3; k++) {
+            double a = rnd_in(-3, 3), b = rnd_in(-3, 3);
+            box.lo.v[k] = fmin(a, b);
+            box.hi.v[k] = fmax(a, b);
+        }
+        double pad = 1e-7 * 3;
+        bsp_box out;
+        int r = kd_clip_prim(s, 0, &box, pad, &scr, &out);
+        REQUIRE(r >= 0);
+        bsp_box tight = box_empty();
+        const int steps = 40;
+        for (int i = 0; i <= steps; i++)
+            for (int j = 0; i + j <= steps; j++) {
+                bsp_vec3 p = tri_point(v, (double)i / steps, (double)j / steps);
+                if (in_box(p, &box)) {
+                    CHECK_MSG(r == 1 && in_box(p, &out), "trial %d: a point of the triangle in "
+                                                         "the box lies outside the clipped bounds",
+                              trial);
+                    tight = box_add_point(tight, p);
+                }
+            }
+        if (r == 1 && !box_is_empty(tight)) {
+            nonempty++;
+            /* tight: no farther from the sampled part than the sampling
+             * step allows (the triangle is at most ~10 across) */
+            for (int k = 0; k < 3; k++) {
+                CHECK(out.lo.v[k] >= tight.lo.v[k] - 0.5 - 2 * pad);
+                CHECK(out.hi.v[k] <= tight.hi.v[k] + 0.5 + 2 * pad);
+            }
+        }
+        /* the sphere: surface points in the box lie in its clipped bounds */
+        r = kd_clip_prim(s, 1, &box, pad, &scr, &out);
+        REQUIRE(r >= 0);
+        for (int i = 0; i < 2000; i++) {
+            bsp_vec3 d = v3_normalize(bsp_v3(rnd_in(-1, 1), rnd_in(-1, 1), rnd_in(-1, 1)));
+            bsp_vec3 p = v3_madd(c, d, rad);
+            if (in_box(p, &box))
+                CHECK_MSG(r == 1 && in_box(p, &out), "trial %d: sphere point outside", trial);
+        }
+        bsp_scene_destroy(s);
+    }
+    CHECK(nonempty > 20);
+    /* a box inside a big sphere does not meet its surface */
+    bsp_scene *s = bsp_scene_create();
+    add_sphere(s, bsp_v3(0, 0, 0), 10);
+    bsp_box inner = {bsp_v3(-1, -1, -1), bsp_v3(1, 1, 1)}, out;
+    CHECK_EQ_INT(kd_clip_prim(s, 0, &inner, 1e-6, NULL, &out), 0);
+    /* a big concave polygon clipped without scratch */
+    bsp_vec3 star[200];
+    for (int i = 0; i < 200; i++) {
+        double a = 2 * BSP_PI * i / 200, rr = (i % 2) ? 1 : 5;
+        star[i] = bsp_v3(rr * cos(a), rr * sin(a), 0);
+    }
+    add_poly(s, star, 200);
+    bsp_box cut = {bsp_v3(2, -0.5, -1), bsp_v3(6, 0.5, 1)};
+    REQUIRE(kd_clip_prim(s, 1, &cut, 1e-6, NULL, &out) == 1);
+    CHECK(out.lo.v[0] >= 2 - 3e-6 && out.hi.v[0] <= 5 + 3e-6);
+    CHECK(out.lo.v[2] >= -3e-6 && out.hi.v[2] <= 3e-6);
+    bsp_scene_destroy(s);
+    kd_clip_scratch_free(&scr);
+}
+
+/* --- determinism, calibration, scaling -------------------------------------------------------------- */
+
+TEST(sah_build_is_deterministic)
+{
+    const char *specs[] = {"spd:balls:2", "spd:gears:1", "spd:tetra:4"};
+    for (size_t i = 0; i < sizeof specs / sizeof specs[0]; i++) {
+        bsp_scene *s = NULL;
+        bsp_error err;
+        REQUIRE(bsp_scene_load(specs[i], &s, &err) == BSP_OK);
+        bsp_build_options o = sah_options();
+        bsp_accel *a = build(s, &o), *b = build(s, &o);
+        const kd_tree *ta = tree_of(a), *tb = tree_of(b);
+        CHECK_EQ_INT(ta->nnodes, tb->nnodes);
+        CHECK_EQ_INT(ta->nprims, tb->nprims);
+        if (ta->nnodes == tb->nnodes && ta->nprims == tb->nprims) {
+            CHECK_MSG(memcmp(ta->nodes, tb->nodes, ta->nnodes * sizeof *ta->nodes) == 0,
+                      "%s: node arrays differ", specs[i]);
+            CHECK_MSG(memcmp(ta->prims, tb->prims, ta->nprims * sizeof *ta->prims) == 0,
+                      "%s: leaf lists differ", specs[i]);
+        }
+        bsp_accel_destroy(a);
+        bsp_accel_destroy(b);
+        bsp_scene_destroy(s);
+    }
+}
+
+TEST(sah_calibration_gives_sane_costs)
+{
+    if (quick())
+        harness_skip("calibration timing is meaningless under sanitizers");
+    bsp_sah_costs c;
+    bsp_error err;
+    REQUIRE(bsp_calibrate_costs(&c, &err) == BSP_OK);
+    double v[] = {c.traversal, c.sphere, c.triangle, c.polygon_base, c.polygon_vertex, c.cone};
+    for (size_t i = 0; i < sizeof v / sizeof v[0]; i++)
+        CHECK_MSG(isfinite(v[i]) && v[i] > 0 && v[i] < 10000, "cost %zu = %g ns", i, v[i]);
+    fprintf(stderr,
+            "    calibration (ns): traversal %.2f sphere %.2f triangle %.2f polygon %.2f + %.2f n "
+            "cone %.2f\n",
+            c.traversal, c.sphere, c.triangle, c.polygon_base, c.polygon_vertex, c.cone);
+}
+
+static double cpu_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Build time per primitive at ~1e4, 1e5, 1e6 primitives (no assertion on
+ * time: it is reported; O(N log N) shows as a slowly growing figure). */
+TEST(sah_scaling_report)
+{
+    const char *specs[] = {"spd:balls:4", "spd:balls:5", "spd:balls:6",
+                           "spd:tetra:7", "spd:tetra:8", "spd:tetra:9"};
+    size_t count = quick() ? 2 : sizeof specs / sizeof specs[0];
+    for (size_t i = 0; i < count; i++) {
+        bsp_scene *s = NULL;
+        bsp_error err;
+        REQUIRE(bsp_scene_load(specs[i], &s, &err) == BSP_OK);
+        bsp_build_options o = sah_options();
+        bsp_accel *a = NULL;
+        double best = INFINITY;
+        for (int rep = 0; rep < 2; rep++) {
+            double t0 = cpu_now();
+            REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+            double el = cpu_now() - t0;
+            best = el < best ? el : best;
+            if (rep == 0)
+                bsp_accel_destroy(a);
+        }
+        bsp_tree_stats st;
+        bsp_accel_tree_stats(a, &st);
+        size_t n = bsp_scene_prim_count(s);
+        fprintf(stderr,
+                "    %-12s N=%8zu  build %7.3f s  %6.2f us/prim  %5.2f Mprim/s  (N_IN %llu N_V "
+                "%llu N_OIV %llu cost %.2f)\n",
+                specs[i], n, best, best / (double)n * 1e6, (double)n / best * 1e-6,
+                (unsigned long long)st.interior_nodes, (unsigned long long)st.leaves,
+                (unsigned long long)st.references, st.expected_cost);
+        bsp_accel_destroy(a);
+        bsp_scene_destroy(s);
+    }
+}

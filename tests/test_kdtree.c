@@ -1,0 +1,537 @@
+/*
+ * test_kdtree.c — exactness of every kd-tree rule against the naive method.
+ *
+ * For each scene (every SPD reference file, and stress scenes made here) and
+ * each kd rule x mailbox on/off: the tree passes the invariant checker, and
+ * seeded rays — origins inside and around the box, random directions, 15%
+ * exactly axis-aligned, 15% with one zero component, some starting exactly
+ * on splitting planes or on primitive surfaces, some with finite [tmin,
+ * tmax] — get the same closest primitive, a bit-identical t, and the same
+ * occlusion answer as the naive method. A "checked" accelerator also runs
+ * whole renders, comparing every primary, secondary and shadow ray.
+ *
+ * BSPRAY_TEST_QUICK=1 (the sanitizer run) scales the ray counts down.
+ */
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "accel/kd_tree.h"
+#include "bspray/bspray.h"
+#include "geom/vec.h"
+#include "harness.h"
+
+static int quick(void)
+{
+    const char *q = getenv("BSPRAY_TEST_QUICK");
+    return q && *q && *q != '0';
+}
+
+static uint64_t rng;
+static double rnd(void)
+{
+    rng ^= rng >> 12;
+    rng ^= rng << 25;
+    rng ^= rng >> 27;
+    return (double)((rng * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+}
+static double rnd_in(double lo, double hi)
+{
+    return lo + (hi - lo) * rnd();
+}
+
+/* Split planes of a kd accel (interior nodes), for rays starting on them. */
+typedef struct plane_list {
+    unsigned axis[4096];
+    double value[4096];
+    int n;
+} plane_list;
+
+static void collect_planes(const bsp_accel *a, plane_list *pl)
+{
+    pl->n = 0;
+    if (bsp_accel_get_kind(a) == BSP_ACCEL_NAIVE)
+        return;
+    const kd_tree *t = a->impl;
+    for (uint32_t i = 0; i < t->nnodes && pl->n < 4096; i++) {
+        if (!kd_is_leaf(&t->nodes[i])) {
+            pl->axis[pl->n] = kd_axis(&t->nodes[i]);
+            pl->value[pl->n] = (double)t->nodes[i].u.split;
+            pl->n++;
+        }
+    }
+}
+
+typedef struct ray_gen {
+    bsp_box box;
+    plane_list planes;
+    bsp_vec3 last_hit; /* a point on a primitive surface, once known */
+    int have_hit;
+} ray_gen;
+
+static bsp_ray make_ray(ray_gen *g)
+{
+    bsp_ray r;
+    bsp_vec3 lo = g->box.lo, hi = g->box.hi, c = v3_scale(v3_add(lo, hi), 0.5);
+    bsp_vec3 half = v3_scale(v3_sub(hi, lo), 0.5);
+    double u = rnd();
+    for (int k = 0; k < 3; k++) {
+        double h = half.v[k] > 0 ? half.v[k] : 1.0;
+        r.org.v[k] = u < 0.5 ? rnd_in(lo.v[k], hi.v[k]) : c.v[k] + rnd_in(-1.6, 1.6) * h;
+    }
+    double w = rnd();
+    if (w < 0.10 && g->planes.n > 0) { /* exactly on a splitting plane */
+        int i = (int)(rnd() * g->planes.n) % g->planes.n;
+        r.org.v[g->planes.axis[i]] = g->planes.value[i];
+    } else if (w < 0.20 && g->have_hit) { /* on a primitive surface */
+        r.org = g->last_hit;
+    }
+    for (int k = 0; k < 3; k++)
+        r.dir.v[k] = rnd_in(-1, 1);
+    double v = rnd();
+    if (v < 0.15) {
+        int axis = (int)(rnd() * 3) % 3;
+        for (int k = 0; k < 3; k++)
+            r.dir.v[k] = k == axis ? (rnd() < 0.5 ? -1.0 : 1.0) : 0.0;
+    } else if (v < 0.30) {
+        r.dir.v[(int)(rnd() * 3) % 3] = 0.0;
+        if (r.dir.x == 0 && r.dir.y == 0 && r.dir.z == 0)
+            r.dir.x = 1;
+    }
+    r.tmin = 0.0;
+    r.tmax = INFINITY;
+    if (rnd() < 0.1) {
+        double diag = v3_length(v3_sub(hi, lo)) / fmax(v3_length(r.dir), 1e-300);
+        r.tmin = rnd_in(0, 0.5) * diag;
+        r.tmax = r.tmin + rnd_in(0, 1.0) * diag;
+    }
+    return r;
+}
+
+static int same_hit(int f1, const bsp_hit *a, int f2, const bsp_hit *b)
+{
+    if (f1 != f2)
+        return 0;
+    if (!f1)
+        return 1;
+    return a->prim == b->prim && memcmp(&a->t, &b->t, sizeof a->t) == 0;
+}
+
+/* Compares every kd rule x mailbox setting with naive on NRAYS rays. */
+static void check_scene(const bsp_scene *scene, const char *name, int nrays, uint64_t seed)
+{
+    bsp_error err;
+    bsp_accel *naive = NULL;
+    REQUIRE(bsp_accel_build(scene, NULL, &naive, &err) == BSP_OK);
+    bsp_query *nq = bsp_query_create(naive);
+    enum { MAXV = 2 * BSP_ACCEL_KIND_COUNT };
+    bsp_accel *acc[MAXV];
+    bsp_query *qs[MAXV];
+    int nv = 0;
+    for (int k = BSP_ACCEL_KAPLAN; k < BSP_ACCEL_KIND_COUNT; k++) {
+        for (int mb = 0; mb < 2; mb++) {
+            bsp_build_options o;
+            bsp_build_options_defaults(&o);
+            o.kind = (bsp_accel_kind)k;
+            o.mailbox = mb;
+            bsp_status st = bsp_accel_build(scene, &o, &acc[nv], &err);
+            CHECK_MSG(st == BSP_OK, "%s: build %s: %s", name, bsp_accel_kind_name(o.kind),
+                      err.message);
+            if (st != BSP_OK)
+                continue;
+            st = bsp_accel_check(acc[nv], &err);
+            CHECK_MSG(st == BSP_OK, "%s: %s tree invariant: %s", name,
+                      bsp_accel_kind_name(o.kind), err.message);
+            qs[nv] = bsp_query_create(acc[nv]);
+            nv++;
+        }
+    }
+    ray_gen g;
+    memset(&g, 0, sizeof g);
+    g.box = bsp_scene_bounds(scene);
+    if (box_is_empty(g.box)) {
+        g.box.lo = bsp_v3(-1, -1, -1);
+        g.box.hi = bsp_v3(1, 1, 1);
+    }
+    if (nv > 0)
+        collect_planes(acc[nv - 1], &g.planes);
+    rng = seed;
+    int bad = 0, hits = 0;
+    for (int i = 0; i < nrays && bad < 5; i++) {
+        bsp_ray r = make_ray(&g);
+        bsp_hit hn, hk;
+        int fn = bsp_intersect(naive, nq, &r, &hn);
+        int on = bsp_occluded(naive, nq, &r);
+        if (fn) {
+            hits++;
+            bsp_vec3 p = ray_at(&r, hn.t);
+            if (v3_is_finite(p)) {
+                g.last_hit = p;
+                g.have_hit = 1;
+            }
+        }
+        for (int v = 0; v < nv; v++) {
+            int fk = bsp_intersect(acc[v], qs[v], &r, &hk);
+            int ok = bsp_occluded(acc[v], qs[v], &r);
+            if (!same_hit(fn, &hn, fk, &hk) || ok != on) {
+                bad++;
+                harness_fail(__FILE__, __LINE__,
+                             "%s: %s mailbox %d, ray %d (%.17g %.17g %.17g  %.17g %.17g %.17g  "
+                             "[%.17g, %.17g]): naive %d prim %u t %.17g occl %d; kd %d prim %u "
+                             "t %.17g occl %d",
+                             name, bsp_accel_kind_name(bsp_accel_get_kind(acc[v])), v % 2, i,
+                             r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y, r.dir.z, r.tmin, r.tmax,
+                             fn, fn ? hn.prim : 0, fn ? hn.t : 0, on, fk, fk ? hk.prim : 0,
+                             fk ? hk.t : 0, ok);
+            }
+        }
+    }
+    /* a scene where nothing is hit tests nothing: make sure rays did hit */
+    if (bsp_scene_prim_count(scene) > 0)
+        CHECK_MSG(hits > nrays / 50, "%s: only %d of %d rays hit", name, hits, nrays);
+    for (int v = 0; v < nv; v++) {
+        bsp_query_destroy(qs[v]);
+        bsp_accel_destroy(acc[v]);
+    }
+    bsp_query_destroy(nq);
+    bsp_accel_destroy(naive);
+}
+
+/* --- SPD reference scenes ----------------------------------------------------------------- */
+
+static void check_spd_file(const char *file, uint64_t seed)
+{
+    const char *shared = harness_shared_dir();
+    if (!shared)
+        harness_skip("../shared is absent: SPD reference scenes not checked");
+    char path[1024];
+    snprintf(path, sizeof path, "%s/scenes/spd/%s", shared, file);
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load(path, &s, &err) == BSP_OK);
+    check_scene(s, file, quick() ? 10000 : 100000, seed);
+    bsp_scene_destroy(s);
+}
+
+#define SPD_EXACTNESS_TEST(name, file, seed)                                                     \
+    TEST(kd_exact_spd_##name)                                                                    \
+    {                                                                                            \
+        check_spd_file(file, seed);                                                              \
+    }
+
+SPD_EXACTNESS_TEST(balls, "balls.nff", 1)
+SPD_EXACTNESS_TEST(gears, "gears.nff", 2)
+SPD_EXACTNESS_TEST(mount, "mount.nff", 3)
+SPD_EXACTNESS_TEST(rings, "rings.nff", 4)
+SPD_EXACTNESS_TEST(teapot, "teapot.nff", 5)
+SPD_EXACTNESS_TEST(teapot_s12, "teapot-s12.nff", 6)
+SPD_EXACTNESS_TEST(tetra, "tetra.nff", 7)
+SPD_EXACTNESS_TEST(tree, "tree.nff", 8)
+SPD_EXACTNESS_TEST(lattice, "lattice.nff", 9)
+SPD_EXACTNESS_TEST(shells, "shells.nff", 10)
+SPD_EXACTNESS_TEST(jacks, "jacks.nff", 11)
+SPD_EXACTNESS_TEST(sombrero, "sombrero.nff", 12)
+SPD_EXACTNESS_TEST(sample, "sample.nff", 13)
+SPD_EXACTNESS_TEST(nurbtst, "nurbtst.nff", 14)
+
+/* Generated in code: runs on a plain clone too. */
+TEST(kd_exact_generated_spd)
+{
+    const char *specs[] = {"spd:balls:2", "spd:tree:6", "spd:rings:2", "spd:gears:1",
+                           "spd:tetra:4", "spd:mount:3"};
+    for (size_t i = 0; i < sizeof specs / sizeof specs[0]; i++) {
+        bsp_scene *s = NULL;
+        bsp_error err;
+        REQUIRE(bsp_scene_load(specs[i], &s, &err) == BSP_OK);
+        check_scene(s, specs[i], quick() ? 3000 : 20000, 100 + i);
+        bsp_scene_destroy(s);
+    }
+}
+
+/* --- stress scenes --------------------------------------------------------------------------- */
+
+static void add_quad(bsp_scene *s, bsp_vec3 a, bsp_vec3 b, bsp_vec3 c, bsp_vec3 d)
+{
+    bsp_error err;
+    bsp_vec3 q[4] = {a, b, c, d};
+    REQUIRE(bsp_scene_add_polygon(s, q, 4, &err) == BSP_OK);
+}
+
+static void add_tri(bsp_scene *s, bsp_vec3 a, bsp_vec3 b, bsp_vec3 c)
+{
+    bsp_error err;
+    bsp_vec3 q[3] = {a, b, c};
+    REQUIRE(bsp_scene_add_polygon(s, q, 3, &err) == BSP_OK);
+}
+
+static void add_sphere(bsp_scene *s, bsp_vec3 c, double r)
+{
+    bsp_error err;
+    REQUIRE(bsp_scene_add_sphere(s, c, r, &err) == BSP_OK);
+}
+
+/* Axis-aligned squares at integer coordinates of [0, 16]^3: Kaplan's median
+ * planes (8, 4, 12, 2, ...) and SAH's candidate planes coincide with them,
+ * and rays along the axes run inside them. */
+TEST(kd_exact_stress_primitives_in_split_planes)
+{
+    bsp_scene *s = bsp_scene_create();
+    rng = 42;
+    for (int i = 0; i <= 16; i += 2)
+        for (int j = 0; j < 16; j += 4)
+            for (int axis = 0; axis < 3; axis++) {
+                double a = i, b = j, e = j + 3;
+                bsp_vec3 p[4];
+                for (int k = 0; k < 4; k++) {
+                    double u = (k == 1 || k == 2) ? e : b, v = (k >= 2) ? e : b;
+                    double co[3];
+                    co[axis] = a;
+                    co[(axis + 1) % 3] = u;
+                    co[(axis + 2) % 3] = v;
+                    p[k] = bsp_v3(co[0], co[1], co[2]);
+                }
+                add_quad(s, p[0], p[1], p[2], p[3]);
+            }
+    /* duplicates of one square: ties at equal t */
+    for (int d = 0; d < 3; d++)
+        add_quad(s, bsp_v3(8, 0, 0), bsp_v3(8, 16, 0), bsp_v3(8, 16, 16), bsp_v3(8, 0, 16));
+    check_scene(s, "squares in planes", quick() ? 5000 : 50000, 7);
+    bsp_scene_destroy(s);
+}
+
+TEST(kd_exact_stress_long_thin_triangles)
+{
+    bsp_scene *s = bsp_scene_create();
+    rng = 43;
+    for (int i = 0; i < 200; i++) {
+        bsp_vec3 a = bsp_v3(rnd_in(-50, -40), rnd_in(-50, 50), rnd_in(-50, 50));
+        bsp_vec3 b = bsp_v3(rnd_in(40, 50), rnd_in(-50, 50), rnd_in(-50, 50));
+        bsp_vec3 c = v3_add(b, bsp_v3(rnd_in(-0.01, 0.01), rnd_in(-0.01, 0.01), 0.02));
+        add_tri(s, a, b, c);
+    }
+    for (int i = 0; i < 300; i++)
+        add_sphere(s, bsp_v3(rnd_in(-45, 45), rnd_in(-45, 45), rnd_in(-45, 45)),
+                   rnd_in(0.2, 3));
+    check_scene(s, "long thin triangles", quick() ? 5000 : 50000, 8);
+    bsp_scene_destroy(s);
+}
+
+/* A dense cluster inside a huge sparse shell of quads, plus cones. */
+TEST(kd_exact_stress_cluster_in_huge_shell)
+{
+    bsp_scene *s = bsp_scene_create();
+    bsp_error err;
+    rng = 44;
+    double R = 1000;
+    add_quad(s, bsp_v3(-R, -R, -R), bsp_v3(R, -R, -R), bsp_v3(R, R, -R), bsp_v3(-R, R, -R));
+    add_quad(s, bsp_v3(-R, -R, R), bsp_v3(-R, R, R), bsp_v3(R, R, R), bsp_v3(R, -R, R));
+    add_quad(s, bsp_v3(-R, -R, -R), bsp_v3(-R, R, -R), bsp_v3(-R, R, R), bsp_v3(-R, -R, R));
+    add_quad(s, bsp_v3(R, -R, -R), bsp_v3(R, -R, R), bsp_v3(R, R, R), bsp_v3(R, R, -R));
+    for (int i = 0; i < 600; i++)
+        add_sphere(s, bsp_v3(rnd_in(-1, 1), rnd_in(-1, 1), rnd_in(-1, 1)), rnd_in(0.01, 0.08));
+    for (int i = 0; i < 100; i++) {
+        bsp_vec3 b = bsp_v3(rnd_in(-1, 1), rnd_in(-1, 1), rnd_in(-1, 1));
+        bsp_vec3 a = v3_add(b, bsp_v3(rnd_in(-0.3, 0.3), rnd_in(-0.3, 0.3), rnd_in(-0.3, 0.3)));
+        REQUIRE(bsp_scene_add_cone(s, b, rnd_in(0.01, 0.05), a, rnd_in(0, 0.05), &err) == BSP_OK);
+    }
+    check_scene(s, "cluster in huge shell", quick() ? 5000 : 50000, 9);
+    bsp_scene_destroy(s);
+}
+
+/* The same kind of content a million units from the origin. */
+TEST(kd_exact_stress_far_from_origin)
+{
+    bsp_scene *s = bsp_scene_create();
+    bsp_error err;
+    rng = 45;
+    bsp_vec3 off = bsp_v3(1e6, -2e6, 3e6);
+    for (int i = 0; i < 300; i++) {
+        bsp_vec3 c = v3_add(off, bsp_v3(rnd_in(-10, 10), rnd_in(-10, 10), rnd_in(-10, 10)));
+        add_sphere(s, c, rnd_in(0.05, 1));
+        bsp_vec3 a = v3_add(c, bsp_v3(rnd_in(-2, 2), rnd_in(-2, 2), rnd_in(-2, 2)));
+        bsp_vec3 b = v3_add(c, bsp_v3(rnd_in(-2, 2), rnd_in(-2, 2), rnd_in(-2, 2)));
+        add_tri(s, c, a, b);
+        REQUIRE(bsp_scene_add_cone(s, a, 0.2, b, 0.1, &err) == BSP_OK);
+    }
+    check_scene(s, "far from origin", quick() ? 5000 : 50000, 10);
+    bsp_scene_destroy(s);
+}
+
+/* Duplicates (ties at equal t across cells), degenerate primitives that are
+ * dropped, and a concave comb polygon. */
+TEST(kd_exact_stress_duplicates_and_degenerates)
+{
+    bsp_scene *s = bsp_scene_create();
+    bsp_error err;
+    rng = 46;
+    for (int i = 0; i < 100; i++) {
+        bsp_vec3 c = bsp_v3(rnd_in(-5, 5), rnd_in(-5, 5), rnd_in(-5, 5));
+        double r = rnd_in(0.1, 1);
+        for (int d = 0; d < 3; d++)
+            add_sphere(s, c, r);
+        REQUIRE(bsp_scene_add_sphere(s, c, 0.0, &err) == BSP_OK); /* dropped */
+        add_tri(s, c, v3_add(c, bsp_v3(1, 0, 0)), v3_add(c, bsp_v3(2, 0, 0))); /* dropped */
+        bsp_vec3 a = v3_add(c, bsp_v3(1, 1, 0)), b = v3_add(c, bsp_v3(0, 1, 1));
+        add_tri(s, c, a, b);
+        add_tri(s, c, a, b);
+    }
+    /* a comb: concave, 4 teeth, in the plane z = 0 */
+    bsp_vec3 comb[12];
+    int n = 0;
+    comb[n++] = bsp_v3(-6, -6, 0);
+    comb[n++] = bsp_v3(6, -6, 0);
+    for (int t = 0; t < 5; t++) {
+        double x = 6 - 3 * t;
+        comb[n++] = bsp_v3(x, 6, 0);
+        if (n < 12)
+            comb[n++] = bsp_v3(x - 1.5, 6, 0);
+    }
+    REQUIRE(bsp_scene_add_polygon(s, comb, (size_t)n, &err) == BSP_OK);
+    check_scene(s, "duplicates and degenerates", quick() ? 5000 : 50000, 11);
+    bsp_scene_destroy(s);
+}
+
+TEST(kd_empty_scene_and_single_primitive)
+{
+    bsp_scene *s = bsp_scene_create();
+    check_scene(s, "empty", 200, 12);
+    add_sphere(s, bsp_v3(0, 0, 0), 1);
+    check_scene(s, "one sphere", 2000, 13);
+    bsp_scene_destroy(s);
+}
+
+/* --- every ray of a render ------------------------------------------------------------------ */
+
+/* An accelerator that answers with the naive method and checks every kd
+ * variant's answer against it (test-only: it plugs into accel_internal.h).
+ * Each render thread makes its own inner queries (thread-local), registered
+ * so that they can be freed afterwards. */
+#define CHECKED_MAX 8
+#define CHECKED_MAX_THREADS 64
+
+typedef struct checked_impl {
+    bsp_accel *naive;
+    bsp_accel *kd[CHECKED_MAX];
+    int nkd;
+    uint64_t rays, mismatches[CHECKED_MAX];
+    bsp_query *all_queries[CHECKED_MAX_THREADS * (CHECKED_MAX + 1)];
+    int nqueries;
+} checked_impl;
+
+/* Each render gets a new generation; a thread whose queries belong to an
+ * older one makes new ones. */
+static int checked_generation;
+static _Thread_local int tl_generation;
+static _Thread_local bsp_query *tl_q[CHECKED_MAX + 1];
+
+static void checked_thread_queries(checked_impl *c)
+{
+    if (tl_generation == checked_generation)
+        return;
+    tl_generation = checked_generation;
+    for (int v = 0; v <= c->nkd; v++) {
+        tl_q[v] = bsp_query_create(v == c->nkd ? c->naive : c->kd[v]);
+        int slot = __atomic_fetch_add(&c->nqueries, 1, __ATOMIC_RELAXED);
+        if (slot < CHECKED_MAX_THREADS * (CHECKED_MAX + 1))
+            c->all_queries[slot] = tl_q[v];
+    }
+}
+
+static int checked_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit)
+{
+    (void)q;
+    checked_impl *c = a->impl;
+    checked_thread_queries(c);
+    int fn = bsp_intersect(c->naive, tl_q[c->nkd], ray, hit);
+    for (int v = 0; v < c->nkd; v++) {
+        bsp_hit hk;
+        int fk = bsp_intersect(c->kd[v], tl_q[v], ray, &hk);
+        if (!same_hit(fn, hit, fk, &hk))
+            __atomic_add_fetch(&c->mismatches[v], 1, __ATOMIC_RELAXED);
+    }
+    __atomic_add_fetch(&c->rays, 1, __ATOMIC_RELAXED);
+    return fn;
+}
+
+static int checked_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
+{
+    (void)q;
+    checked_impl *c = a->impl;
+    checked_thread_queries(c);
+    int on = bsp_occluded(c->naive, tl_q[c->nkd], ray);
+    for (int v = 0; v < c->nkd; v++)
+        if (bsp_occluded(c->kd[v], tl_q[v], ray) != on)
+            __atomic_add_fetch(&c->mismatches[v], 1, __ATOMIC_RELAXED);
+    __atomic_add_fetch(&c->rays, 1, __ATOMIC_RELAXED);
+    return on;
+}
+
+static const accel_ops checked_ops = {checked_intersect, checked_occluded, NULL};
+
+/* Renders SPEC at RES x RES (SPD sampling, depth 4) with the naive method,
+ * checking every primary, secondary and shadow ray of it against every kd
+ * rule x mailbox setting. */
+static void check_render(const char *spec, int res)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load(spec, &s, &err) == BSP_OK);
+    static checked_impl c; /* large; one render at a time */
+    memset(&c, 0, sizeof c);
+    checked_generation++;
+    REQUIRE(bsp_accel_build(s, NULL, &c.naive, &err) == BSP_OK);
+    for (int k = BSP_ACCEL_KAPLAN; k < BSP_ACCEL_KIND_COUNT && c.nkd + 2 <= CHECKED_MAX; k++)
+        for (int mb = 0; mb < 2; mb++) {
+            bsp_build_options o;
+            bsp_build_options_defaults(&o);
+            o.kind = (bsp_accel_kind)k;
+            o.mailbox = mb;
+            REQUIRE(bsp_accel_build(s, &o, &c.kd[c.nkd], &err) == BSP_OK);
+            c.nkd++;
+        }
+    bsp_accel shell;
+    memset(&shell, 0, sizeof shell);
+    shell.scene = s;
+    bsp_build_options_defaults(&shell.opts);
+    shell.opts.mailbox = 0;
+    shell.ops = &checked_ops;
+    shell.impl = &c;
+    bsp_render_options ro;
+    bsp_render_options_defaults(&ro);
+    ro.width = ro.height = res;
+    bsp_image *img = NULL;
+    bsp_render_stats st;
+    REQUIRE(bsp_render(&shell, &ro, &img, &st, &err) == BSP_OK);
+    uint64_t all = st.cls[0].rays + st.cls[1].rays + st.cls[2].rays;
+    CHECK_EQ_INT(c.rays, all);
+    CHECK(st.cls[BSP_RAY_SHADOW].rays > 0);
+    for (int v = 0; v < c.nkd; v++) {
+        CHECK_MSG(c.mismatches[v] == 0, "%s with %s (mailbox %d): %llu of %llu rays differ",
+                  spec, bsp_accel_kind_name(bsp_accel_get_kind(c.kd[v])), v % 2,
+                  (unsigned long long)c.mismatches[v], (unsigned long long)c.rays);
+    }
+    fprintf(stderr, "    %s: %llu rays (%d x %d, primary, shadow, secondary) x %d kd variants "
+            "checked against naive\n",
+            spec, (unsigned long long)c.rays, res, res, c.nkd);
+    bsp_image_destroy(img);
+    for (int i = 0; i < c.nqueries && i < CHECKED_MAX_THREADS * (CHECKED_MAX + 1); i++)
+        bsp_query_destroy(c.all_queries[i]);
+    for (int v = 0; v < c.nkd; v++)
+        bsp_accel_destroy(c.kd[v]);
+    bsp_accel_destroy(c.naive);
+    bsp_scene_destroy(s);
+}
+
+/* The issue asks for every ray of 513 x 513 renders of balls and tree; the
+ * sanitizer run (BSPRAY_TEST_QUICK) uses 65 x 65. */
+TEST(kd_exact_every_ray_of_balls_render)
+{
+    check_render("spd:balls", quick() ? 65 : 513);
+}
+
+TEST(kd_exact_every_ray_of_tree_render)
+{
+    check_render("spd:tree", quick() ? 65 : 513);
+}

@@ -1,0 +1,516 @@
+/*
+ * bench.c — `bspray bench`: build, validate and time acceleration methods on
+ * scenes, and print Havran's figures as a Markdown table (and CSV).
+ *
+ * For each scene x method:
+ *   1. build (T_B) and take the tree's figures (N_IN, N_V, N_EV, N_OIV, bytes);
+ *   2. validate before timing: seeded random rays around the scene and the
+ *      camera's primary rays are shot with the method and with the naive
+ *      method; any difference (primitive, bit-identical t, occlusion) aborts;
+ *   3. render once single-threaded (T_TR 1t) while recording every ray by
+ *      class, and take the per-ray figures N_IT, N_TS, N_ETS, N_EETS;
+ *   4. render again with all threads (T_TR Nt);
+ *   5. shoot the recorded primary, shadow and secondary rays alone, with 1
+ *      and with all threads, for the pure ray-shooting throughput of each
+ *      class (closest hit for primary and secondary rays, any hit for shadow
+ *      rays), in Mrays/s.
+ * Times are wall-clock seconds on a monotonic clock; single-thread figures
+ * are the ones to compare across machines.
+ */
+#include <errno.h>
+#include <inttypes.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "cli.h"
+
+static const char bench_usage[] =
+    "bspray bench [SCENE...] [--accel LIST] [--res N] [--depth N] [--threads N]\n"
+    "                        [--mailbox on|off] [--validate N] [--csv FILE] [--quiet]";
+
+/* The default scene list: every SPD database at its default size, teapot at
+ * the size of the SPD Readme and Havran's tables. */
+static const char *const default_scenes[] = {
+    "spd:balls", "spd:gears",   "spd:lattice",  "spd:mount",  "spd:rings",
+    "spd:teapot:12", "spd:tetra", "spd:tree", "spd:shells", "spd:jacks",
+    "spd:sombrero", "spd:sample", "spd:nurbtst"};
+
+/* naive is benchmarked by default only up to this many primitives */
+#define NAIVE_DEFAULT_MAX_PRIMS 2000
+
+static void print_help(void)
+{
+    printf("usage: %s\n\n"
+           "Benchmark acceleration methods: build time and memory, Havran's tree and per-ray\n"
+           "figures, render times and ray-shooting throughput per ray class.\n"
+           "\n"
+           "Every method is validated before it is timed: random rays and the camera's\n"
+           "primary rays must give exactly the naive method's answers, or bench stops\n"
+           "with exit status 1.\n"
+           "\n"
+           "  SCENE...          scenes (files or spd:NAME[:SIZE]); default: every SPD scene\n"
+           "  --accel LIST      comma-separated methods (default: naive where the scene has\n"
+           "                    at most %d primitives, and every kd-tree rule)\n"
+           "  --res N           N x N rays, SPD corner sampling (default 513: Havran's protocol)\n"
+           "  --depth N         ray depth (default 4)\n"
+           "  --threads N       the 'all threads' figures use N threads (default: all cores)\n"
+           "  --mailbox on|off  mailboxes for kd-trees (default on)\n"
+           "  --validate N      random rays compared with naive before timing (default 20000)\n"
+           "  --csv FILE        also write one CSV row per scene x method\n"
+           "  --quiet           no progress lines on stderr\n"
+           "\n"
+           "Columns: T_B build seconds; MB structure size; N_V leaves; N_IT intersection tests\n"
+           "and N_TS traversal steps per ray (all rays of the render); T_TR render seconds on\n"
+           "1 and N threads; Mrays/s of pure ray shooting per class on 1 and N threads.\n",
+           bench_usage, NAIVE_DEFAULT_MAX_PRIMS);
+}
+
+/* --- recorded rays ------------------------------------------------------------ */
+
+typedef struct ray_set {
+    bsp_ray *rays;
+    size_t n, cap;
+    int failed;
+} ray_set;
+
+static void log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
+{
+    ray_set *set = &((ray_set *)ctx)[cls];
+    if (set->failed)
+        return;
+    if (set->n == set->cap) {
+        size_t ncap = set->cap ? set->cap * 2 : 1 << 16;
+        bsp_ray *nr = realloc(set->rays, ncap * sizeof *nr);
+        if (!nr) {
+            set->failed = 1;
+            return;
+        }
+        set->rays = nr;
+        set->cap = ncap;
+    }
+    set->rays[set->n++] = *ray;
+}
+
+/* --- timed shooting of a ray set -------------------------------------------- */
+
+typedef struct shoot_job {
+    const bsp_accel *accel;
+    const bsp_ray *rays;
+    size_t begin, end;
+    int any;
+    uint64_t hits;
+    int failed;
+} shoot_job;
+
+static void *shoot_main(void *arg)
+{
+    shoot_job *j = arg;
+    bsp_query *q = bsp_query_create(j->accel);
+    if (!q) {
+        j->failed = 1;
+        return NULL;
+    }
+    uint64_t hits = 0;
+    bsp_hit h;
+    for (size_t i = j->begin; i < j->end; i++)
+        hits += j->any ? (uint64_t)bsp_occluded(j->accel, q, &j->rays[i])
+                       : (uint64_t)bsp_intersect(j->accel, q, &j->rays[i], &h);
+    j->hits = hits;
+    bsp_query_destroy(q);
+    return NULL;
+}
+
+/* Mrays/s of shooting SET with THREADS threads (0 when the set is empty). */
+static double shoot_rate(const bsp_accel *accel, const ray_set *set, int any, int threads)
+{
+    if (set->n == 0)
+        return 0.0;
+    shoot_job jobs[256];
+    pthread_t tids[256];
+    if (threads > 256)
+        threads = 256;
+    for (int t = 0; t < threads; t++) {
+        jobs[t] = (shoot_job){accel, set->rays, set->n * (size_t)t / (size_t)threads,
+                              set->n * (size_t)(t + 1) / (size_t)threads, any, 0, 0};
+    }
+    double t0 = now_seconds();
+    int started = 1;
+    for (; started < threads; started++)
+        if (pthread_create(&tids[started], NULL, shoot_main, &jobs[started]) != 0)
+            break;
+    shoot_main(&jobs[0]);
+    for (int t = 1; t < started; t++)
+        pthread_join(tids[t], NULL);
+    for (int t = started; t < threads; t++) /* threads that could not start */
+        shoot_main(&jobs[t]);
+    double dt = now_seconds() - t0;
+    return dt > 0 ? (double)set->n / dt * 1e-6 : 0.0;
+}
+
+/* --- validation -------------------------------------------------------------- */
+
+static uint64_t rng_state;
+static double rnd(void)
+{
+    rng_state ^= rng_state >> 12;
+    rng_state ^= rng_state << 25;
+    rng_state ^= rng_state >> 27;
+    return (double)((rng_state * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static int same_answer(const bsp_accel *a, bsp_query *qa, const bsp_accel *n, bsp_query *qn,
+                       const bsp_ray *r)
+{
+    bsp_hit ha, hn;
+    int fa = bsp_intersect(a, qa, r, &ha), fn = bsp_intersect(n, qn, r, &hn);
+    if (fa != fn || (fa && (ha.prim != hn.prim || memcmp(&ha.t, &hn.t, sizeof ha.t) != 0)))
+        return 0;
+    return bsp_occluded(a, qa, r) == bsp_occluded(n, qn, r);
+}
+
+/* Compares ACCEL with NAIVE on NRAND random rays and on a grid of primary
+ * rays; returns the number of rays checked, or -1 on the first difference
+ * (described in *WHAT). */
+static long validate(const bsp_accel *accel, const bsp_accel *naive, const bsp_scene *scene,
+                     int nrand, char *what, size_t what_size)
+{
+    bsp_query *qa = bsp_query_create(accel), *qn = bsp_query_create(naive);
+    if (!qa || !qn) {
+        bsp_query_destroy(qa);
+        bsp_query_destroy(qn);
+        snprintf(what, what_size, "out of memory");
+        return -1;
+    }
+    bsp_box b = bsp_scene_bounds(scene);
+    if (b.lo.x > b.hi.x)
+        b.lo = bsp_v3(-1, -1, -1), b.hi = bsp_v3(1, 1, 1);
+    rng_state = 0x9E3779B97F4A7C15ULL;
+    long checked = 0;
+    for (int i = 0; i < nrand; i++, checked++) {
+        bsp_ray r;
+        for (int k = 0; k < 3; k++) {
+            double c = 0.5 * (b.lo.v[k] + b.hi.v[k]), h = 0.5 * (b.hi.v[k] - b.lo.v[k]) + 1e-3;
+            r.org.v[k] = c + (rnd() * 3.0 - 1.5) * h;
+            r.dir.v[k] = rnd() * 2.0 - 1.0;
+        }
+        if (i % 7 == 0) /* axis-aligned */
+            for (int k = 0; k < 3; k++)
+                r.dir.v[k] = k == i % 3 ? 1.0 : 0.0;
+        r.tmin = 0;
+        r.tmax = INFINITY;
+        if (!same_answer(accel, qa, naive, qn, &r)) {
+            snprintf(what, what_size, "random ray %d (%.17g %.17g %.17g  %.17g %.17g %.17g)", i,
+                     r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y, r.dir.z);
+            checked = -1;
+            break;
+        }
+    }
+    const bsp_camera *cam = bsp_scene_camera(scene);
+    if (checked >= 0 && cam) {
+        /* a 64 x 64 grid of eye rays through the view */
+        bsp_vec3 f = {{cam->at.x - cam->from.x, cam->at.y - cam->from.y, cam->at.z - cam->from.z}};
+        double lf = sqrt(f.x * f.x + f.y * f.y + f.z * f.z);
+        bsp_vec3 u = cam->up;
+        bsp_vec3 rgt = {{f.y * u.z - f.z * u.y, f.z * u.x - f.x * u.z, f.x * u.y - f.y * u.x}};
+        double lr = sqrt(rgt.x * rgt.x + rgt.y * rgt.y + rgt.z * rgt.z);
+        bsp_vec3 up = {{rgt.y * f.z - rgt.z * f.y, rgt.z * f.x - rgt.x * f.z,
+                        rgt.x * f.y - rgt.y * f.x}};
+        double lu = sqrt(up.x * up.x + up.y * up.y + up.z * up.z);
+        double half = tan(cam->angle_deg * 3.14159265358979323846 / 360.0);
+        for (int y = 0; y < 64 && checked >= 0; y++)
+            for (int x = 0; x < 64; x++, checked++) {
+                double sx = (2.0 * x / 63.0 - 1.0) * half, sy = (1.0 - 2.0 * y / 63.0) * half;
+                bsp_ray r;
+                r.org = cam->from;
+                for (int k = 0; k < 3; k++)
+                    r.dir.v[k] = f.v[k] / lf + sx * rgt.v[k] / lr + sy * up.v[k] / lu;
+                r.tmin = 0;
+                r.tmax = INFINITY;
+                if (!same_answer(accel, qa, naive, qn, &r)) {
+                    snprintf(what, what_size, "eye ray (%d, %d)", x, y);
+                    checked = -1;
+                    break;
+                }
+            }
+    }
+    bsp_query_destroy(qa);
+    bsp_query_destroy(qn);
+    return checked;
+}
+
+/* --- the benchmark ---------------------------------------------------------------- */
+
+typedef struct bench_opts {
+    int res, depth, threads, mailbox, nvalidate, quiet;
+    bsp_accel_kind kinds[BSP_ACCEL_KIND_COUNT];
+    int nkinds, kinds_given;
+    FILE *csv;
+} bench_opts;
+
+typedef struct bench_row {
+    const char *scene;
+    size_t nprims;
+    const char *method;
+    double t_build, mbytes;
+    bsp_tree_stats tree;
+    double n_it, n_ts, n_ets, n_eets;
+    uint64_t rays[BSP_RAY_CLASS_COUNT];
+    double t_tr1, t_trn;
+    double rate1[BSP_RAY_CLASS_COUNT], raten[BSP_RAY_CLASS_COUNT];
+    long validated;
+} bench_row;
+
+static void print_header(int threads)
+{
+    printf("| scene | N | method | T_B[s] | MB | N_V | N_IT | N_TS | T_TR 1t[s] | T_TR %dt[s] "
+           "| primary Mrays/s 1t / %dt | shadow Mrays/s 1t / %dt | secondary Mrays/s 1t / %dt "
+           "|\n",
+           threads, threads, threads, threads);
+    printf("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+}
+
+static void print_rate(double r1, double rn, uint64_t n)
+{
+    if (n == 0)
+        printf(" – |");
+    else
+        printf(" %.2f / %.2f |", r1, rn);
+}
+
+static void print_row(const bench_row *r)
+{
+    printf("| %s | %zu | %s | %.3f | %.2f | %" PRIu64 " | %.2f | %.2f | %.2f | %.2f |", r->scene,
+           r->nprims, r->method, r->t_build, r->mbytes, r->tree.leaves, r->n_it, r->n_ts,
+           r->t_tr1, r->t_trn);
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++)
+        print_rate(r->rate1[c], r->raten[c], r->rays[c]);
+    printf("\n");
+    fflush(stdout);
+}
+
+static void csv_header(FILE *f)
+{
+    fprintf(f, "scene,N,accel,T_B,bytes,N_IN,N_V,N_EV,N_OIV,max_depth,expected_cost,N_IT,N_TS,"
+               "N_ETS,N_EETS,primary_rays,shadow_rays,secondary_rays,T_TR_1t,T_TR_all,threads,"
+               "primary_Mrays_1t,primary_Mrays_all,shadow_Mrays_1t,shadow_Mrays_all,"
+               "secondary_Mrays_1t,secondary_Mrays_all,validated_rays\n");
+}
+
+static void csv_row(FILE *f, const bench_row *r, int threads)
+{
+    fprintf(f,
+            "%s,%zu,%s,%.6f,%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%" PRIu64
+            ",%d,%.4f,%.4f,%.4f,%.4f,%.4f,%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%.4f,%.4f,%d",
+            r->scene, r->nprims, r->method, r->t_build, r->tree.bytes, r->tree.interior_nodes,
+            r->tree.leaves, r->tree.empty_leaves, r->tree.references, r->tree.max_leaf_depth,
+            r->tree.expected_cost, r->n_it, r->n_ts, r->n_ets, r->n_eets,
+            r->rays[BSP_RAY_PRIMARY], r->rays[BSP_RAY_SHADOW], r->rays[BSP_RAY_SECONDARY],
+            r->t_tr1, r->t_trn, threads);
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++)
+        fprintf(f, ",%.4f,%.4f", r->rate1[c], r->raten[c]);
+    fprintf(f, ",%ld\n", r->validated);
+    fflush(f);
+}
+
+/* Benchmarks one method on SCENE; returns 0, or 1 when validation failed. */
+static int bench_method(const bench_opts *o, const char *scene_name, const bsp_scene *scene,
+                        const bsp_accel *naive, bsp_accel_kind kind)
+{
+    bench_row row;
+    memset(&row, 0, sizeof row);
+    row.scene = scene_name;
+    row.nprims = bsp_scene_prim_count(scene);
+    row.method = bsp_accel_kind_name(kind);
+    bsp_build_options bo;
+    bsp_build_options_defaults(&bo);
+    bo.kind = kind;
+    bo.mailbox = o->mailbox;
+    if (!o->quiet)
+        fprintf(stderr, "%s: %s: %s: building\n", prog, scene_name, row.method);
+    bsp_accel *accel = build_accel(scene, &bo);
+    row.t_build = bsp_accel_build_seconds(accel);
+    bsp_accel_tree_stats(accel, &row.tree);
+    row.mbytes = (double)row.tree.bytes / (1024.0 * 1024.0);
+
+    if (kind != BSP_ACCEL_NAIVE) {
+        char what[256];
+        row.validated = validate(accel, naive, scene, o->nvalidate, what, sizeof what);
+        if (row.validated < 0) {
+            fprintf(stderr, "%s: %s: %s differs from the naive method on %s; aborting\n", prog,
+                    scene_name, row.method, what);
+            bsp_accel_destroy(accel);
+            return 1;
+        }
+    }
+
+    ray_set sets[BSP_RAY_CLASS_COUNT];
+    memset(sets, 0, sizeof sets);
+    bsp_render_options ro;
+    bsp_render_options_defaults(&ro);
+    ro.width = ro.height = o->res;
+    ro.max_depth = o->depth;
+    ro.threads = 1;
+    ro.ray_log = log_ray;
+    ro.ray_log_ctx = sets;
+    bsp_image *img = NULL;
+    bsp_render_stats st;
+    bsp_error err;
+    if (!o->quiet)
+        fprintf(stderr, "%s: %s: %s: rendering\n", prog, scene_name, row.method);
+    if (bsp_render(accel, &ro, &img, &st, &err) != BSP_OK) {
+        fprintf(stderr, "%s: %s: %s\n", prog, scene_name, err.message);
+        bsp_accel_destroy(accel);
+        return 1;
+    }
+    bsp_image_destroy(img);
+    row.t_tr1 = st.render_seconds;
+    uint64_t all = 0, tests = 0, steps = 0, ets = 0, eets = 0;
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
+        row.rays[c] = st.cls[c].rays;
+        all += st.cls[c].rays;
+        tests += st.cls[c].isect_tests;
+        steps += st.cls[c].traversal_steps;
+        ets += st.cls[c].leaves_visited;
+        eets += st.cls[c].empty_leaves;
+    }
+    if (all) {
+        row.n_it = (double)tests / (double)all;
+        row.n_ts = (double)steps / (double)all;
+        row.n_ets = (double)ets / (double)all;
+        row.n_eets = (double)eets / (double)all;
+    }
+    ro.ray_log = NULL;
+    ro.threads = o->threads;
+    if (bsp_render(accel, &ro, &img, &st, &err) == BSP_OK) {
+        row.t_trn = st.render_seconds;
+        bsp_image_destroy(img);
+    }
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
+        if (sets[c].failed) {
+            fprintf(stderr, "%s: out of memory recording rays\n", prog);
+            continue;
+        }
+        int any = c == BSP_RAY_SHADOW;
+        row.rate1[c] = shoot_rate(accel, &sets[c], any, 1);
+        row.raten[c] = shoot_rate(accel, &sets[c], any, o->threads);
+        free(sets[c].rays);
+    }
+    print_row(&row);
+    if (o->csv)
+        csv_row(o->csv, &row, o->threads);
+    bsp_accel_destroy(accel);
+    return 0;
+}
+
+static void parse_accel_list(args *a, bench_opts *o)
+{
+    const char *v = opt_value(a, "--accel");
+    char buf[256];
+    snprintf(buf, sizeof buf, "%s", v);
+    o->nkinds = 0;
+    o->kinds_given = 1;
+    char *save = NULL;
+    for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+        bsp_error err;
+        bsp_accel_kind k;
+        if (bsp_accel_kind_parse(tok, &k, &err) != BSP_OK)
+            die_usage(a->usage, "%s", err.message);
+        if (o->nkinds < BSP_ACCEL_KIND_COUNT)
+            o->kinds[o->nkinds++] = k;
+    }
+    if (o->nkinds == 0)
+        die_usage(a->usage, "%s", "--accel needs at least one method");
+}
+
+int cmd_bench(int argc, char **argv)
+{
+    args a = {argc, 1, argv, bench_usage};
+    bench_opts o;
+    memset(&o, 0, sizeof o);
+    o.res = 513;
+    o.depth = 4;
+    o.mailbox = 1;
+    o.nvalidate = 20000;
+    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+    o.threads = ncpu > 0 ? (int)ncpu : 1;
+    for (int k = 0; k < BSP_ACCEL_KIND_COUNT; k++)
+        o.kinds[o.nkinds++] = (bsp_accel_kind)k;
+    const char *csv_path = NULL;
+    const char **scenes = calloc((size_t)argc + 1, sizeof *scenes);
+    int nscenes = 0;
+    if (!scenes) {
+        fprintf(stderr, "%s: out of memory\n", prog);
+        return EXIT_INPUT;
+    }
+    for (; a.i < argc; a.i++) {
+        const char *s = argv[a.i];
+        if (is_help(s)) {
+            print_help();
+            free(scenes);
+            return 0;
+        } else if (!strcmp(s, "--accel")) {
+            parse_accel_list(&a, &o);
+        } else if (!strcmp(s, "--res")) {
+            o.res = parse_int(&a, s, 1, 65536);
+        } else if (!strcmp(s, "--depth")) {
+            o.depth = parse_int(&a, s, 0, 64);
+        } else if (!strcmp(s, "--threads")) {
+            o.threads = parse_int(&a, s, 1, 256);
+        } else if (!strcmp(s, "--mailbox")) {
+            o.mailbox = parse_on_off(&a, s);
+        } else if (!strcmp(s, "--validate")) {
+            o.nvalidate = parse_int(&a, s, 0, 100000000);
+        } else if (!strcmp(s, "--csv")) {
+            csv_path = opt_value(&a, s);
+        } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
+            o.quiet = 1;
+        } else if (s[0] == '-' && s[1]) {
+            die_usage(a.usage, "unknown option '%s'", s);
+        } else {
+            scenes[nscenes++] = s;
+        }
+    }
+    if (nscenes == 0) {
+        for (size_t i = 0; i < sizeof default_scenes / sizeof default_scenes[0]; i++)
+            scenes[nscenes++] = default_scenes[i];
+    }
+    if (csv_path) {
+        o.csv = fopen(csv_path, "w");
+        if (!o.csv) {
+            fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, csv_path,
+                    strerror(errno));
+            free(scenes);
+            return EXIT_INPUT;
+        }
+        csv_header(o.csv);
+    }
+    print_header(o.threads);
+    int rc = 0;
+    for (int i = 0; i < nscenes && rc == 0; i++) {
+        bsp_scene *scene = load_scene(scenes[i]);
+        if (!bsp_scene_camera(scene)) {
+            fprintf(stderr, "%s: %s: no camera; skipped\n", prog, scenes[i]);
+            bsp_scene_destroy(scene);
+            continue;
+        }
+        bsp_accel *naive = build_accel(scene, NULL);
+        for (int k = 0; k < o.nkinds && rc == 0; k++) {
+            if (o.kinds[k] == BSP_ACCEL_NAIVE && !o.kinds_given &&
+                bsp_scene_prim_count(scene) > NAIVE_DEFAULT_MAX_PRIMS)
+                continue; /* would not finish in reasonable time */
+            rc = bench_method(&o, scenes[i], scene, naive, o.kinds[k]);
+        }
+        bsp_accel_destroy(naive);
+        bsp_scene_destroy(scene);
+    }
+    if (o.csv && fclose(o.csv) != 0) {
+        fprintf(stderr, "%s: %s: write failed: %s\n", prog, csv_path, strerror(errno));
+        rc = EXIT_INPUT;
+    }
+    free(scenes);
+    return rc ? EXIT_INPUT : 0;
+}
