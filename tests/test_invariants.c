@@ -54,11 +54,8 @@ static void check_row(const havran_row *h)
     bsp_scene *s = NULL;
     bsp_error err;
     REQUIRE(bsp_scene_load(h->spec, &s, &err) == BSP_OK);
-    bsp_build_options bo;
-    bsp_build_options_defaults(&bo);
-    bo.kind = BSP_ACCEL_KAPLAN;
-    bsp_accel *a = NULL;
-    REQUIRE(bsp_accel_build(s, &bo, &a, &err) == BSP_OK);
+    bsp_accel *a = NULL; /* the default method (sah) */
+    REQUIRE(bsp_accel_build(s, NULL, &a, &err) == BSP_OK);
     bsp_render_options ro;
     bsp_render_options_defaults(&ro); /* SPD sampling: 513 x 513, depth 4 */
     bsp_image *img = NULL;

@@ -186,7 +186,10 @@ TEST(naive_matches_independent_reference)
     make_ref_scene(&rs, 12345);
     bsp_accel *a = NULL;
     bsp_error err;
-    REQUIRE(bsp_accel_build(rs.scene, NULL, &a, &err) == BSP_OK);
+    bsp_build_options opts;
+    bsp_build_options_defaults(&opts);
+    opts.kind = BSP_ACCEL_NAIVE;
+    REQUIRE(bsp_accel_build(rs.scene, &opts, &a, &err) == BSP_OK);
     bsp_query *q = bsp_query_create(a);
     REQUIRE(q);
     int hits = 0, compared = 0;
@@ -244,7 +247,10 @@ TEST(naive_ties_go_to_lowest_index)
     REQUIRE(bsp_scene_add_sphere(s, bsp_v3(0, 0, -3), 1.0, &err) == BSP_OK);  /* 3 */
     REQUIRE(bsp_scene_add_sphere(s, bsp_v3(0, 0, -3), 1.0, &err) == BSP_OK);  /* 4 */
     bsp_accel *a = NULL;
-    REQUIRE(bsp_accel_build(s, NULL, &a, &err) == BSP_OK);
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_NAIVE;
+    REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
     bsp_query *q = bsp_query_create(a);
     bsp_ray down = {bsp_v3(0, 0, 2), bsp_v3(0, 0, -1), 0, INFINITY};
     bsp_hit h;

@@ -53,7 +53,7 @@ static const char render_help[] =
     "  --depth N          maximum ray depth: primary rays have depth 0 and spawn reflected\n"
     "                     and refracted rays while below N (default 4, the paper's and\n"
     "                     Havran's setting; the SPD Readme calls it depth 5)\n"
-    "  --accel METHOD     acceleration method: naive (default), kaplan\n"
+    "  --accel METHOD     acceleration method: sah (default), kaplan, naive\n"
     "  --mailbox on|off   test each primitive at most once per ray (default on)\n"
     "  --threads N        worker threads (default: all cores); the image does not depend on it\n"
     "  --stats-json FILE  also write the statistics as JSON\n"
@@ -342,7 +342,7 @@ static const char trace_help[] =
     "\n"
     "  --rays FILE        the rays (required)\n"
     "  --any              occlusion queries instead of closest hits\n"
-    "  --accel METHOD     acceleration method: naive (default), kaplan\n"
+    "  --accel METHOD     acceleration method: sah (default), kaplan, naive\n"
     "  --mailbox on|off   test each primitive at most once per ray (default on)\n";
 
 /* Parses one number of a ray line; accepts inf/-inf only where ALLOW_INF. */

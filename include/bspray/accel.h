@@ -62,7 +62,7 @@ typedef struct bsp_build_options {
                            means 1 (the cost decides); the paper's setting is 18 and 2 */
     bsp_sah_costs sah_costs; /* sah: cost model; 0 fields take the defaults */
     double sah_empty_bonus;  /* sah: a split with one empty side costs (1 - bonus) times
-                                its cost; 0: the default (0.2), negative: no bonus */
+                                its cost; 0: the default (0.1), negative: no bonus */
 } bsp_build_options;
 
 void bsp_build_options_defaults(bsp_build_options *opts);
@@ -70,7 +70,7 @@ void bsp_build_options_defaults(bsp_build_options *opts);
 /* Measures on this machine, on synthetic random rays, the time in ns of one
  * ray-primitive test per kind (polygons as polygon_base + polygon_vertex * n,
  * fitted over several vertex counts) and of one kd-tree traversal step.
- * Takes about a second; results vary by a few percent between runs. */
+ * Takes one to two seconds; on a busy machine results vary between runs. */
 bsp_status bsp_calibrate_costs(bsp_sah_costs *ns_out, bsp_error *err);
 
 /* "naive", ...; NULL for an unknown kind. */

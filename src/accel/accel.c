@@ -21,7 +21,7 @@ double accel_now(void)
 void bsp_build_options_defaults(bsp_build_options *opts)
 {
     memset(opts, 0, sizeof *opts);
-    opts->kind = BSP_ACCEL_NAIVE;
+    opts->kind = BSP_ACCEL_SAH; /* the default for render, trace and make run */
     opts->mailbox = 1;
     kd_cost_defaults(&opts->sah_costs);
     opts->sah_empty_bonus = KD_DEFAULT_EMPTY_BONUS;

@@ -66,10 +66,13 @@ static size_t clip_plane(const bsp_vec3 *in, size_t n, bsp_vec3 *out, int k, dou
 
 #define STACK_VERTS 32
 
-/* Bounds of polygon VS[0..N) ∩ G into *B (PB: its unclipped bounds). Each
- * plane at most doubles the vertex count (an output vertex is an input
- * vertex or a crossing edge), so the output buffer is grown to 2N first; it
- * never holds the current polygon, which lives in the other one. */
+/* Bounds of polygon VS[0..N) ∩ G into *B (PB: its unclipped bounds). The
+ * planes of G are taken in the order of the share of the current bounds
+ * they cut away, largest first, and skipped once the current polygon lies on
+ * their kept side, so a large polygon in a small cell shrinks at the first
+ * plane. Each plane at most doubles the vertex count (an output vertex is an
+ * input vertex or a crossing edge), so the output buffer is grown to 2N
+ * first; it never holds the current polygon, which lives in the other one. */
 static int clip_polygon(const bsp_vec3 *vs, size_t n, bsp_box pb, const bsp_box *g,
                         kd_clip_scratch *scr, bsp_box *b)
 {
@@ -79,12 +82,27 @@ static int clip_polygon(const bsp_vec3 *vs, size_t n, bsp_box pb, const bsp_box 
     kd_clip_scratch local = {{NULL, NULL}, {0, 0}};
     kd_clip_scratch *s = scr ? scr : &local;
     const bsp_vec3 *cur = vs;
-    int o = 0, result = 1;
-    for (int plane = 0; plane < 6 && n > 0; plane++) {
+    bsp_box cb = pb; /* bounds of the current polygon */
+    int o = 0, result = 1, done = 0;
+    while (n > 0) {
+        int plane = -1;
+        double most = 0.0;
+        for (int pl = 0; pl < 6; pl++) {
+            int k = pl >> 1, above = !(pl & 1);
+            double c = above ? g->lo.v[k] : g->hi.v[k], ext = cb.hi.v[k] - cb.lo.v[k];
+            double cut = above ? c - cb.lo.v[k] : cb.hi.v[k] - c;
+            if ((done >> pl) & 1 || !(cut > 0.0))
+                continue;
+            double share = ext > 0.0 ? cut / ext : 1.0;
+            if (plane < 0 || share > most) {
+                plane = pl;
+                most = share;
+            }
+        }
+        if (plane < 0)
+            break; /* on the kept side of every remaining plane */
+        done |= 1 << plane;
         int k = plane >> 1, above = !(plane & 1);
-        double c = above ? g->lo.v[k] : g->hi.v[k];
-        if (above ? !(pb.lo.v[k] < c) : !(pb.hi.v[k] > c))
-            continue; /* the polygon lies on the kept side of this plane */
         if (2 * n > cap[o]) {
             if (2 * n > s->cap[o]) {
                 size_t ncap = s->cap[o] * 2 > 2 * n ? s->cap[o] * 2 : 2 * n;
@@ -99,23 +117,48 @@ static int clip_polygon(const bsp_vec3 *vs, size_t n, bsp_box pb, const bsp_box 
             buf[o] = s->buf[o];
             cap[o] = s->cap[o];
         }
-        n = clip_plane(cur, n, buf[o], k, c, above);
+        n = clip_plane(cur, n, buf[o], k, above ? g->lo.v[k] : g->hi.v[k], above);
         cur = buf[o];
         o ^= 1;
+        cb = box_empty();
+        for (size_t i = 0; i < n; i++)
+            cb = box_add_point(cb, cur[i]);
     }
     if (result == 1) {
-        if (n == 0) {
+        if (n == 0)
             result = 0;
-        } else {
-            bsp_box r = box_empty();
-            for (size_t i = 0; i < n; i++)
-                r = box_add_point(r, cur[i]);
-            *b = r;
-        }
+        else
+            *b = cb;
     }
     if (!scr)
         kd_clip_scratch_free(&local);
     return result;
+}
+
+/* Bounds of triangle V ∩ G into *B (PB: its unclipped bounds): the convex
+ * case, at most 3 + 6 vertices, in fixed buffers. */
+static int clip_triangle(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g, bsp_box *b)
+{
+    bsp_vec3 buf[2][12];
+    const bsp_vec3 *cur = v;
+    size_t n = 3;
+    int o = 0;
+    for (int pl = 0; pl < 6; pl++) {
+        int k = pl >> 1, above = !(pl & 1);
+        double c = above ? g->lo.v[k] : g->hi.v[k];
+        if (above ? !(pb.lo.v[k] < c) : !(pb.hi.v[k] > c))
+            continue;
+        n = clip_plane(cur, n, buf[o], k, c, above);
+        if (n == 0)
+            return 0;
+        cur = buf[o];
+        o ^= 1;
+    }
+    bsp_box r = box_empty();
+    for (size_t i = 0; i < n; i++)
+        r = box_add_point(r, cur[i]);
+    *b = r;
+    return 1;
 }
 
 /* Bounds of the sphere's surface ∩ G (through the ball ∩ G, exact per
@@ -192,7 +235,7 @@ int kd_clip_prim(const bsp_scene *scene, uint32_t prim, const bsp_box *box, doub
         case SHAPE_TRIANGLE: {
             const triangle_shape *tr = &scene->triangles[p->slot];
             bsp_vec3 vs[3] = {tr->v0, v3_add(tr->v0, tr->e1), v3_add(tr->v0, tr->e2)};
-            r = clip_polygon(vs, 3, pb, &g, scr, &b);
+            r = clip_triangle(vs, pb, &g, &b);
             break;
         }
         case SHAPE_POLYGON: {

@@ -8,41 +8,46 @@
  * Calibration: the shapes of each kind are set up directly (the code of
  * src/geom, as the traversal calls it) at random in the unit cube, and 512
  * rays from random points of [-1, 2]^3 aimed at random points of the unit
- * cube are tested against every one of them; the best of several timed
- * rounds gives ns per test. Polygons are regular n-gons for several n, fitted
- * by least squares to base + vertex * n. A traversal step is timed on a
- * Kaplan tree over many tiny spheres, where rays make many steps and few
- * tests: (time - tests * sphere cost) / steps.
+ * cube are tested against every one of them; the best of several rounds,
+ * timed in thread CPU time, gives ns per test. Polygons are regular n-gons for several n, fitted
+ * by least squares to base + vertex * n. A traversal step is measured in
+ * place: the same rays through Kaplan trees of several depths over tiny
+ * spheres, the time per ray fitted by least squares to
+ * a + steps * C_trav + tests * C_sphere; the in-tree sphere cost over the
+ * isolated one (cold caches) then scales every kind.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "accel/kd_cost.h"
 #include "geom/vec.h"
 
 /*
  * Defaults, in units of one traversal step (C_trav = 1). Measured with
- * bsp_calibrate_costs (`bspray calibrate`) on the development machine (an
- * Intel Xeon VM, gcc -O2, 2 cores, single thread) when the SAH builder was
- * written: traversal step 4.0 ns; sphere 6.3 ns, triangle 5.0 ns, polygon
- * 7.6 + 2.9 n ns, cone 12.2 ns (median of 3 calibration runs, rounded).
+ * bsp_calibrate_costs (`bspray calibrate`) on the development machine (a
+ * 2-core Intel Xeon VM shared with other jobs, gcc -O2) on 2026-11-22 when
+ * the SAH builder was written: the median over 12 runs of each cost's ratio
+ * to the traversal step. Median absolute figures: traversal step 13 ns,
+ * sphere 9 ns, triangle 34 ns (Moeller-Trumbore's sign tests mispredict on
+ * incoherent rays), polygon 22 + 2.5 n ns, cone 23 ns; single runs varied
+ * by up to +-50 % under the machine's load, the ratios by less.
  */
-#define NS_TRAVERSAL 4.0
-#define NS_SPHERE 6.3
-#define NS_TRIANGLE 5.0
-#define NS_POLYGON_BASE 7.6
-#define NS_POLYGON_VERTEX 2.9
-#define NS_CONE 12.2
+#define T_SPHERE 0.67
+#define T_TRIANGLE 2.57
+#define T_POLYGON_BASE 1.58
+#define T_POLYGON_VERTEX 0.185
+#define T_CONE 2.0
 
 void kd_cost_defaults(bsp_sah_costs *c)
 {
     c->traversal = 1.0;
-    c->sphere = NS_SPHERE / NS_TRAVERSAL;
-    c->triangle = NS_TRIANGLE / NS_TRAVERSAL;
-    c->polygon_base = NS_POLYGON_BASE / NS_TRAVERSAL;
-    c->polygon_vertex = NS_POLYGON_VERTEX / NS_TRAVERSAL;
-    c->cone = NS_CONE / NS_TRAVERSAL;
+    c->sphere = T_SPHERE;
+    c->triangle = T_TRIANGLE;
+    c->polygon_base = T_POLYGON_BASE;
+    c->polygon_vertex = T_POLYGON_VERTEX;
+    c->cone = T_CONE;
 }
 
 static double or_default(double v, double d)
@@ -159,6 +164,15 @@ static size_t cal_pass(const cal_set *cs, const bsp_ray *rays)
 
 static volatile size_t cal_sink;
 
+/* Seconds of CPU time of this thread: unlike wall time, not inflated while
+ * other processes run. */
+static double cpu_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 /* ns per ray-shape test: the best of CAL_ROUNDS rounds of at least
  * CAL_MIN_SECONDS each. */
 static double cal_time(const cal_set *cs, const bsp_ray *rays)
@@ -166,11 +180,11 @@ static double cal_time(const cal_set *cs, const bsp_ray *rays)
     double best = INFINITY;
     for (int round = 0; round < CAL_ROUNDS; round++) {
         size_t passes = 0, hits = 0;
-        double t0 = accel_now(), el;
+        double t0 = cpu_now(), el;
         do {
             hits += cal_pass(cs, rays);
             passes++;
-            el = accel_now() - t0;
+            el = cpu_now() - t0;
         } while (el < CAL_MIN_SECONDS);
         cal_sink += hits;
         double ns = el * 1e9 / ((double)passes * CAL_RAYS * (double)cs->n);
@@ -193,54 +207,107 @@ static void frame(uint64_t *s, bsp_vec3 *n, bsp_vec3 *a, bsp_vec3 *b)
     *b = v3_cross(*n, *a);
 }
 
-static bsp_status cal_traversal(double ns_sphere, double *ns_out, bsp_error *err)
+/* Solves the 3 x 3 system M x = V (Cramer); 0 when singular. */
+static int solve3(double m[3][3], const double v[3], double x[3])
 {
+    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                 m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    if (!(fabs(det) > 0.0))
+        return 0;
+    for (int c = 0; c < 3; c++) {
+        double t[3][3];
+        memcpy(t, m, sizeof t);
+        for (int r = 0; r < 3; r++)
+            t[r][c] = v[r];
+        x[c] = (t[0][0] * (t[1][1] * t[2][2] - t[1][2] * t[2][1]) -
+                t[0][1] * (t[1][0] * t[2][2] - t[1][2] * t[2][0]) +
+                t[0][2] * (t[1][0] * t[2][1] - t[1][1] * t[2][0])) /
+               det;
+    }
+    return 1;
+}
+
+/* The traversal step and the sphere test as they cost inside the
+ * traversal (cache misses included): Kaplan trees of several depths over
+ * tiny spheres, the same rays through each, and a least-squares fit of the
+ * time per ray to a + steps * C_trav + tests * C_sphere. */
+static bsp_status cal_traversal(double *ns_trav, double *ns_sphere, bsp_error *err)
+{
+    enum { NRAYS = 4096, NCONF = 6 };
+    static const int depth[NCONF] = {4, 7, 10, 13, 16, 20};
     bsp_scene *sc = bsp_scene_create();
-    if (!sc)
+    bsp_ray *rays = malloc(NRAYS * sizeof *rays);
+    if (!sc || !rays) {
+        bsp_scene_destroy(sc);
+        free(rays);
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    }
     uint64_t s = 0x5eed5eedULL;
     bsp_status st = BSP_OK;
     for (int i = 0; i < 4000 && st == BSP_OK; i++)
-        st = bsp_scene_add_sphere(sc, vrand(&s, 0, 1), 0.002, err);
-    bsp_accel *a = NULL;
-    bsp_build_options o;
-    bsp_build_options_defaults(&o);
-    o.kind = BSP_ACCEL_KAPLAN;
-    if (st == BSP_OK)
-        st = bsp_accel_build(sc, &o, &a, err);
-    bsp_query *q = a ? bsp_query_create(a) : NULL;
-    if (st == BSP_OK && !q)
-        st = error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
-    if (st == BSP_OK) {
-        double best = INFINITY;
-        for (int round = 0; round < CAL_ROUNDS; round++) {
-            bsp_query_reset_counters(q);
-            double t0 = accel_now(), el;
-            size_t hits = 0;
-            do {
-                for (int r = 0; r < 256; r++) {
-                    bsp_ray ray;
-                    ray.org = vrand(&s, -1, 2);
-                    ray.dir = v3_sub(vrand(&s, 0, 1), ray.org);
-                    ray.tmin = 0;
-                    ray.tmax = INFINITY;
-                    bsp_hit h;
-                    hits += (size_t)bsp_intersect(a, q, &ray, &h);
-                }
-                el = accel_now() - t0;
-            } while (el < 4 * CAL_MIN_SECONDS);
-            cal_sink += hits;
-            const bsp_query_counters *c = bsp_query_get_counters(q);
-            double ns = (el * 1e9 - (double)c->isect_tests * ns_sphere) /
-                        (double)(c->traversal_steps ? c->traversal_steps : 1);
-            if (ns < best)
-                best = ns;
-        }
-        *ns_out = best > 0.1 ? best : 0.1;
+        st = bsp_scene_add_sphere(sc, vrand(&s, 0, 1), 0.004, err);
+    for (int r = 0; r < NRAYS; r++) {
+        rays[r].org = vrand(&s, -1, 2);
+        rays[r].dir = v3_sub(vrand(&s, 0, 1), rays[r].org);
+        rays[r].tmin = 0;
+        rays[r].tmax = INFINITY;
     }
-    bsp_query_destroy(q);
-    bsp_accel_destroy(a);
+    double m[3][3] = {{0}}, v[3] = {0};
+    for (int c = 0; c < NCONF && st == BSP_OK; c++) {
+        bsp_accel *a = NULL;
+        bsp_build_options o;
+        bsp_build_options_defaults(&o);
+        o.kind = BSP_ACCEL_KAPLAN;
+        o.max_depth = depth[c];
+        o.max_leaf_prims = 1;
+        st = bsp_accel_build(sc, &o, &a, err);
+        bsp_query *q = a ? bsp_query_create(a) : NULL;
+        if (st == BSP_OK && !q)
+            st = error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+        if (st == BSP_OK) {
+            double best = INFINITY, steps = 0, tests = 0;
+            for (int round = 0; round < CAL_ROUNDS; round++) {
+                size_t passes = 0, hits = 0;
+                double t0 = cpu_now(), el;
+                do {
+                    bsp_query_reset_counters(q);
+                    for (int r = 0; r < NRAYS; r++) {
+                        bsp_hit h;
+                        hits += (size_t)bsp_intersect(a, q, &rays[r], &h);
+                    }
+                    passes++;
+                    el = cpu_now() - t0;
+                } while (el < CAL_MIN_SECONDS);
+                cal_sink += hits;
+                const bsp_query_counters *qc = bsp_query_get_counters(q);
+                steps = (double)qc->traversal_steps / NRAYS;
+                tests = (double)qc->isect_tests / NRAYS;
+                double ns = el * 1e9 / ((double)passes * NRAYS);
+                best = ns < best ? ns : best;
+            }
+            double x[3] = {1.0, steps, tests};
+            for (int i = 0; i < 3; i++) {
+                for (int j = 0; j < 3; j++)
+                    m[i][j] += x[i] * x[j];
+                v[i] += x[i] * best;
+            }
+        }
+        bsp_query_destroy(q);
+        bsp_accel_destroy(a);
+    }
+    double x[3];
+    if (st == BSP_OK) {
+        if (!solve3(m, v, x) || !(x[1] > 0.0) || !(x[2] > 0.0))
+            st = error_set(err, BSP_ERR_INVALID, NULL, 0,
+                           "calibration: the timings did not fit (a busy machine?)");
+        else {
+            *ns_trav = x[1];
+            *ns_sphere = x[2];
+        }
+    }
     bsp_scene_destroy(sc);
+    free(rays);
     return st;
 }
 
@@ -315,7 +382,19 @@ bsp_status bsp_calibrate_costs(bsp_sah_costs *ns, bsp_error *err)
     ns->polygon_base = (sy - slope * sx) / NPOLY;
     if (!(ns->polygon_base > 0.01))
         ns->polygon_base = 0.01;
-    st = cal_traversal(ns->sphere, &ns->traversal, err);
+    /* in the traversal a test also fetches its primitive from a cold cache:
+     * scale every kind by the in-traversal / isolated ratio of the sphere */
+    double sphere_in_tree = 0.0;
+    st = cal_traversal(&ns->traversal, &sphere_in_tree, err);
+    if (st == BSP_OK) {
+        double f = sphere_in_tree / ns->sphere;
+        f = f > 1.0 ? f : 1.0;
+        ns->sphere *= f;
+        ns->triangle *= f;
+        ns->polygon_base *= f;
+        ns->polygon_vertex *= f;
+        ns->cone *= f;
+    }
 done:
     free(rays);
     free(sp);

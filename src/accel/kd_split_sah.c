@@ -1,50 +1,61 @@
 /*
  * kd_split_sah.c — the SAH kd-tree builder: MacDonald & Booth's cost model
- * (1990; Havran, Bittner & Kopal's "surface area heuristics"), built exactly
- * in O(N log N) by Wald & Havran's presorted event lists (2006), with perfect
- * splits (straddling primitives clipped to each child).
+ * (1990; the "surface area heuristics" of Havran, Bittner & Kopal), built
+ * exactly in O(N log N) from presorted event lists (Wald & Havran 2006),
+ * with perfect splits (straddling primitives clipped to each child).
  *
  * Cost of a candidate plane in node V (T_i from kd_cost.c, A the pluggable
- * measure of kd_cost.h, called for the node and both children):
+ * measure of kd_cost.h, evaluated for the node and both children):
  *     C = C_trav + A(V_L)/A(V) sum_{i in L} T_i + A(V_R)/A(V) sum_{i in R} T_i,
- * times (1 - empty_bonus) when one side holds no primitive (empty space
- * culling; the whole cost is scaled, as Mitsuba does). A leaf costs sum T_i.
+ * times (1 - empty_bonus) when one side holds no primitive — empty space
+ * culling; the whole cost is scaled, as in Mitsuba (pbrt scales only the
+ * intersection term), default bonus 0.1. A leaf costs sum T_i.
  *
  * Events. Each primitive of a node carries a box: its padded bounds, clipped
- * (kd_clip.c) to the cell where it last straddled a plane, rounded outward to
- * floats (lo down, hi up). Per axis it has a START event at lo and an END
- * event at hi, lo < hi always (the padding is positive). An event is one
- * 64-bit key — orderable float bits of the position, then the type
- * (END = 0 < START = 1), then the primitive index — so sorting keys sorts by
- * (position, type, primitive), a total order, and the build is deterministic.
- * The three lists of a node (2n events each) are sorted once at the root
- * (stable radix sort); children inherit the order by stable filtering, and
- * only the events of straddling primitives are made anew, sorted and merged.
+ * (kd_clip.c) to the cell where it last straddled a plane, rounded outward
+ * to floats (lo down, hi up). Per axis it has a START event at lo and an END
+ * event at hi; lo < hi always (the padding is positive). An event is one
+ * 64-bit key: orderable float bits of the position, the type (END = 0 <
+ * START = 1), a cost class, the primitive index — so comparing keys orders
+ * by (position, type, cost class, primitive), a total order, and the build is
+ * deterministic. The three lists of the root (2N events each) are radix-
+ * sorted once; a child inherits their order by stable filtering, and only
+ * the events of straddlers are made anew (clipped), sorted and merged in.
+ * Per node: one sweep per axis finds the best plane, one sweep of the split
+ * axis classifies, one pass per axis splits the lists — O(n) plus the
+ * straddlers' O(s log s). Never a per-node full sort.
  *
- * Exactness conventions (kd_tree.h). Candidates are event positions, floats,
- * strictly inside the cell; the float is the stored plane and the child
+ * Exactness conventions (kd_tree.h). Candidates are event positions, floats
+ * strictly inside the cell; that float is the stored plane and the child
  * boundary. Classification is strict: left if lo < s, right if hi > s. A
  * primitive lying in a plane c has the box [c - pad, c + pad] (rounded
- * outward): a split at c puts it in both children, the candidates c - pad
- * and c + pad cut it off on either side — in-plane primitives need no
- * planar events, the padding handles them explicitly. A straddler is clipped
- * to each child cell and dropped from a child its clipped box does not
- * overlap (it is then at least about pad away from that cell).
+ * outward): a split at c puts it in both children, and the candidates
+ * c - pad and c + pad cut it off on either side — this is how in-plane
+ * primitives are handled, explicitly, without planar events. A straddler is
+ * clipped to each child cell and dropped from a child its clipped box does
+ * not overlap (it is then about pad away from that cell).
  *
- * Termination: a leaf at max_depth or with <= max_leaf_prims primitives, or
- * when no candidate lies inside the cell, or when the best split does not
- * beat the leaf cost — except that, as in pbrt and Mitsuba, up to
- * MAX_BAD_REFINES such splits are made along a path (unless the split costs
- * over 4x the leaf and the node has < 16 primitives), so a split that only
- * pays off deeper can be found. Such a subtree is retracted into one leaf
- * afterwards when its actual cost is not below the leaf cost (Mitsuba).
+ * Termination: a leaf at max_depth, with <= max_leaf_prims primitives, when
+ * no candidate lies inside the cell, or when the best split does not beat
+ * the leaf cost — except that one such "bad refine" is allowed along a path
+ * (pbrt and Mitsuba allow 3; on the SPD scenes the second and third saved at
+ * most a few percent of intersection tests and doubled the build time,
+ * speculative subtrees being mostly retracted), unless the split costs
+ * over 4x the leaf with < 16 primitives (pbrt). A subtree under a bad refine
+ * whose actual cost is not below its leaf cost is retracted into one leaf
+ * afterwards (Mitsuba).
+ *
+ * Not used: min-max binning near the root (Mitsuba). Tried with 256 bins
+ * above 4096 primitives, it saved ~15% of the build on balls but cost 6-8%
+ * of expected cost on tetra (its planes must hit the Sierpinski grid
+ * exactly), beyond the 2% allowed.
  *
  * Memory: one event stack addressed by index (growing it is safe). A node's
- * lists are at [base, base + 6n); the right child's lists are written above
- * the node's free top, then the left child's are made in place (stable
- * compaction forward, merge backward), so a chain of cuts reuses one region
- * and the stack stays O(N) beyond straddler duplication. No allocation per
- * node: every scratch array is grown amortized.
+ * lists are at base + k * stride (stride >= 2n); the right child's lists are
+ * written above the node's free top, then the left child's are made in place
+ * (stable compaction forward, merge backward), so a chain of cuts reuses one
+ * region and a one-sided split copies nothing. No allocation per node: every
+ * scratch array is grown amortized.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -57,7 +68,7 @@
 
 #define EV_START ((uint64_t)1 << 31)
 #define EV_PRIM 0x0fffffffu /* SCENE_MAX_PRIMS = 2^28 */
-static int MAX_BAD_REFINES = 1;
+#define MAX_BAD_REFINES 1
 
 _Static_assert(SCENE_MAX_PRIMS <= (size_t)EV_PRIM + 1, "primitive index fits an event");
 
@@ -130,8 +141,8 @@ static inline float round_up(double x)
 
 /* --- sorting -------------------------------------------------------------------------- */
 
-/* LSD radix sort of A[0..N) by the whole key, 6 passes of 11 bits through TMP[0..N); passes where every key has the
- * same digit are skipped. */
+/* LSD radix sort of A[0..N) by the whole key: 6 passes of 11 bits through
+ * TMP[0..N), skipping a pass where every key has the same digit. */
 static void radix_sort(uint64_t *a, uint64_t *tmp, size_t n)
 {
     enum { BITS = 11, BUCKETS = 1 << BITS };
@@ -521,8 +532,8 @@ static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     }
     const size_t ns = n - n_lonly - n_ronly;
 
-    /* 3. the one-sided events: right ones compacted above TOP (the
-     * straddlers gathered on the way), left ones compacted in place */
+    /* 3. the one-sided events, in one pass per axis: right ones compacted
+     * above TOP, left ones in place (the straddlers gathered on the way) */
     bsp_box lcell = cell, rcell = cell;
     lcell.hi.v[axis] = rcell.lo.v[axis] = s;
     node_lists LL = {L.base, L.stride, 0, 0.0}, RL = {L.base, L.stride, 0, 0.0};
@@ -537,40 +548,27 @@ static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
         RL.base = top;
         RL.stride = 2 * (n_ronly + ns);
         free_top = top + 3 * RL.stride;
-        if (!grow_u64(&b->ev, &b->cap, free_top) || !grow_list(b, n + 1))
+        /* + 1: the branch-free loop below stores one event past the last */
+        if (!grow_u64(&b->ev, &b->cap, free_top + 1) || !grow_list(b, n + 1))
             return oom(b);
         const uint8_t *cls = b->cls;
         uint32_t *strad = b->list;
         size_t nsg = 0;
         for (unsigned k = 0; k < 3; k++) {
-            const uint64_t *src = b->ev + L.base + k * L.stride;
+            uint64_t *src = b->ev + L.base + k * L.stride; /* left: in place, a <= i */
             uint64_t *dst = b->ev + RL.base + k * RL.stride;
-            size_t o = 0;
-            if (k == 0) {
-                for (size_t i = 0; i < m; i++) {
-                    uint64_t x = src[i];
-                    uint8_t c = cls[ev_prim(x)];
-                    dst[o] = x;
-                    o += c == CLS_RIGHT;
+            size_t a = 0, o = 0;
+            for (size_t i = 0; i < m; i++) {
+                uint64_t x = src[i];
+                uint8_t c = cls[ev_prim(x)];
+                src[a] = x;
+                a += c == CLS_LEFT;
+                dst[o] = x;
+                o += c == CLS_RIGHT;
+                if (k == 0) {
                     strad[nsg] = ev_prim(x);
                     nsg += (c == CLS_BOTH) & (size_t)((x >> 31) & 1);
                 }
-            } else {
-                for (size_t i = 0; i < m; i++) {
-                    uint64_t x = src[i];
-                    dst[o] = x;
-                    o += cls[ev_prim(x)] == CLS_RIGHT;
-                }
-            }
-        }
-        for (unsigned k = 0; k < 3; k++) {
-            const uint64_t *src = b->ev + L.base + k * L.stride;
-            uint64_t *dst = b->ev + L.base + k * L.stride; /* writes trail reads */
-            size_t o = 0;
-            for (size_t i = 0; i < m; i++) {
-                uint64_t x = src[i];
-                dst[o] = x;
-                o += cls[ev_prim(x)] == CLS_LEFT;
             }
         }
 
@@ -679,8 +677,6 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     b.ctrav = cm.c.traversal;
     b.bonus_mul = 1.0 - cm.empty_bonus;
     b.err = err;
-    if (getenv("SAH_BAD")) MAX_BAD_REFINES = atoi(getenv("SAH_BAD"));
-    if (getenv("SAH_BONUS")) b.bonus_mul = 1.0 - atof(getenv("SAH_BONUS"));
 
     bsp_status st = BSP_OK;
     size_t n = 0;

@@ -76,7 +76,8 @@ int kd_make_leaf(kd_tree *t, uint32_t i, const uint32_t *prims, size_t n)
         t->prims = np;
         t->cap_prims = ncap;
     }
-    memcpy(t->prims + t->nprims, prims, n * sizeof *prims);
+    if (n > 0) /* prims may be NULL for an empty leaf */
+        memcpy(t->prims + t->nprims, prims, n * sizeof *prims);
     t->nodes[i].u.first = (uint32_t)t->nprims;
     t->nodes[i].bits = ((uint32_t)n << 2) | KD_LEAF_TAG;
     t->nprims += n;
