@@ -51,7 +51,7 @@ run: $(CLI)
 	@mkdir -p out
 	./$(CLI) render $(DEFAULT_SCENE) -o out/balls.png
 
-DEFAULT_SCENE ?= $(if $(wildcard ../shared/scenes/spd/balls.nff),../shared/scenes/spd/balls.nff,spd:balls)
+DEFAULT_SCENE ?= spd:balls
 
 test: $(CLI) $(TESTS)
 	BSPRAY_CLI=./$(CLI) ./$(TESTS)
