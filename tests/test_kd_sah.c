@@ -447,7 +447,10 @@ static void check_exact_accel(const bsp_scene *s, const char *name, bsp_accel *c
 {
     bsp_error err;
     bsp_accel *naive = NULL;
-    REQUIRE(bsp_accel_build(s, NULL, &naive, &err) == BSP_OK);
+    bsp_build_options naive_opts;
+    bsp_build_options_defaults(&naive_opts);
+    naive_opts.kind = BSP_ACCEL_NAIVE; /* the reference; the default is a tree */
+    REQUIRE(bsp_accel_build(s, &naive_opts, &naive, &err) == BSP_OK);
     bsp_query *nq = bsp_query_create(naive), *q[2];
     for (int v = 0; v < 2; v++)
         q[v] = bsp_query_create(acc[v]);
@@ -888,7 +891,14 @@ TEST(sah_calibration_gives_sane_costs)
         harness_skip("calibration timing is meaningless under sanitizers");
     bsp_sah_costs c;
     bsp_error err;
-    REQUIRE(bsp_calibrate_costs(&c, &err) == BSP_OK);
+    bsp_status st = bsp_calibrate_costs(&c, &err);
+    if (st != BSP_OK) {
+        /* timings can refuse to fit on a loaded machine: that must be the
+         * documented error, never another one (this is not a timed test) */
+        CHECK_EQ_INT(st, BSP_ERR_INVALID);
+        CHECK_STR_CONTAINS(err.message, "did not fit");
+        return;
+    }
     double v[] = {c.traversal, c.sphere, c.triangle, c.polygon_base, c.polygon_vertex, c.cone};
     for (size_t i = 0; i < sizeof v / sizeof v[0]; i++)
         CHECK_MSG(isfinite(v[i]) && v[i] > 0 && v[i] < 10000, "cost %zu = %g ns", i, v[i]);

@@ -124,7 +124,10 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
 {
     bsp_error err;
     bsp_accel *naive = NULL;
-    REQUIRE(bsp_accel_build(scene, NULL, &naive, &err) == BSP_OK);
+    bsp_build_options naive_opts;
+    bsp_build_options_defaults(&naive_opts);
+    naive_opts.kind = BSP_ACCEL_NAIVE; /* the reference; the default is a tree */
+    REQUIRE(bsp_accel_build(scene, &naive_opts, &naive, &err) == BSP_OK);
     bsp_query *nq = bsp_query_create(naive);
     enum { MAXV = 2 * BSP_ACCEL_KIND_COUNT };
     bsp_accel *acc[MAXV];
@@ -481,7 +484,10 @@ static void check_render(const char *spec, int res)
     static checked_impl c; /* large; one render at a time */
     memset(&c, 0, sizeof c);
     checked_generation++;
-    REQUIRE(bsp_accel_build(s, NULL, &c.naive, &err) == BSP_OK);
+    bsp_build_options naive_opts;
+    bsp_build_options_defaults(&naive_opts);
+    naive_opts.kind = BSP_ACCEL_NAIVE; /* the reference; the default is a tree */
+    REQUIRE(bsp_accel_build(s, &naive_opts, &c.naive, &err) == BSP_OK);
     for (int k = BSP_ACCEL_KAPLAN; k < BSP_ACCEL_KIND_COUNT && c.nkd + 2 <= CHECKED_MAX; k++)
         for (int mb = 0; mb < 2; mb++) {
             bsp_build_options o;

@@ -497,7 +497,10 @@ int cmd_bench(int argc, char **argv)
             bsp_scene_destroy(scene);
             continue;
         }
-        bsp_accel *naive = build_accel(scene, NULL);
+        bsp_build_options naive_opts;
+        bsp_build_options_defaults(&naive_opts);
+        naive_opts.kind = BSP_ACCEL_NAIVE; /* the reference; the default is a tree */
+        bsp_accel *naive = build_accel(scene, &naive_opts);
         for (int k = 0; k < o.nkinds && rc == 0; k++) {
             if (o.kinds[k] == BSP_ACCEL_NAIVE && !o.kinds_given &&
                 bsp_scene_prim_count(scene) > NAIVE_DEFAULT_MAX_PRIMS)

@@ -103,9 +103,11 @@ typedef struct bsp_tree_stats {
 
 void bsp_accel_tree_stats(const bsp_accel *accel, bsp_tree_stats *stats);
 
-/* Checks the structure's invariants (child indices in range, depth within
- * the limit, every primitive whose bounds overlap a leaf's box listed in that
- * leaf). BSP_OK, or BSP_ERR_INVALID with the first violation in ERR. */
+/* Checks the structure's invariants (child indices in range, split planes
+ * inside their cells, depth within the limit, every primitive whose part
+ * inside a leaf's cell — its padded bounds clipped to the cell — overlaps
+ * that cell listed in that leaf). BSP_OK, or BSP_ERR_INVALID with the first
+ * violation in ERR. */
 bsp_status bsp_accel_check(const bsp_accel *accel, bsp_error *err);
 
 /* Per-query counters, accumulated over every call made with one bsp_query. */

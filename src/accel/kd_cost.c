@@ -385,7 +385,12 @@ bsp_status bsp_calibrate_costs(bsp_sah_costs *ns, bsp_error *err)
     /* in the traversal a test also fetches its primitive from a cold cache:
      * scale every kind by the in-traversal / isolated ratio of the sphere */
     double sphere_in_tree = 0.0;
-    st = cal_traversal(&ns->traversal, &sphere_in_tree, err);
+    /* the fit can fail on a busy machine: try again a few times */
+    for (int attempt = 0; attempt < 3; attempt++) {
+        st = cal_traversal(&ns->traversal, &sphere_in_tree, err);
+        if (st != BSP_ERR_INVALID)
+            break;
+    }
     if (st == BSP_OK) {
         double f = sphere_in_tree / ns->sphere;
         f = f > 1.0 ? f : 1.0;

@@ -10,7 +10,9 @@
  *
  * Conservative assignment invariant (what exactness rests on): a primitive
  * is listed in every leaf whose box overlaps the interior of its bounds
- * padded by `pad` (lo < cell.hi and hi > cell.lo on every axis). A primitive
+ * padded by `pad` (lo < cell.hi and hi > cell.lo on every axis) — for SAH
+ * trees, of the bounds of its part inside the cell (perfect splits: the
+ * primitive clipped to the padded cell, then padded; kd_clip.c). A primitive
  * lies at least `pad` inside its padded bounds, so it is listed in every
  * leaf whose closed box it touches — in both children when it lies in a
  * splitting plane — and the padding (KD_PAD_REL times the scene scale) is far
