@@ -440,7 +440,8 @@ int cmd_bench(int argc, char **argv)
     for (int k = 0; k < BSP_ACCEL_KIND_COUNT; k++)
         o.kinds[o.nkinds++] = (bsp_accel_kind)k;
     const char *csv_path = NULL;
-    const char **scenes = calloc((size_t)argc + 1, sizeof *scenes);
+    size_t ndefault = sizeof default_scenes / sizeof default_scenes[0];
+    const char **scenes = calloc((size_t)argc + ndefault + 1, sizeof *scenes);
     int nscenes = 0;
     if (!scenes) {
         fprintf(stderr, "%s: out of memory\n", prog);
@@ -475,7 +476,7 @@ int cmd_bench(int argc, char **argv)
         }
     }
     if (nscenes == 0) {
-        for (size_t i = 0; i < sizeof default_scenes / sizeof default_scenes[0]; i++)
+        for (size_t i = 0; i < ndefault; i++)
             scenes[nscenes++] = default_scenes[i];
     }
     if (csv_path) {
