@@ -56,6 +56,7 @@ static void check_row(const havran_row *h)
     REQUIRE(bsp_scene_load(h->spec, &s, &err) == BSP_OK);
     bsp_accel *a = NULL; /* the default method (sah) */
     REQUIRE(bsp_accel_build(s, NULL, &a, &err) == BSP_OK);
+    CHECK_MSG(bsp_accel_check(a, &err) == BSP_OK, "%s: %s", h->spec, err.message);
     bsp_render_options ro;
     bsp_render_options_defaults(&ro); /* SPD sampling: 513 x 513, depth 4 */
     bsp_image *img = NULL;

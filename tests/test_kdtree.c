@@ -495,6 +495,7 @@ static void check_render(const char *spec, int res)
             o.kind = (bsp_accel_kind)k;
             o.mailbox = mb;
             REQUIRE(bsp_accel_build(s, &o, &c.kd[c.nkd], &err) == BSP_OK);
+            CHECK_MSG(bsp_accel_check(c.kd[c.nkd], &err) == BSP_OK, "%s: %s", spec, err.message);
             c.nkd++;
         }
     bsp_accel shell;

@@ -109,6 +109,7 @@ static bsp_image *render(const bsp_scene *s, int threads, int depth, bsp_render_
     bsp_accel *a = NULL;
     bsp_error err;
     REQUIRE(bsp_accel_build(s, NULL, &a, &err) == BSP_OK);
+    CHECK_MSG(bsp_accel_check(a, &err) == BSP_OK, "%s", err.message);
     bsp_render_options o;
     bsp_render_options_defaults(&o);
     o.threads = threads;

@@ -612,7 +612,7 @@ static int cmd_stats(int argc, char **argv)
 
 /* --- gen ------------------------------------------------------------------------------ */
 
-static const char gen_usage[] = "bspray gen NAME [-s SIZE] [-o FILE.nff]";
+static const char gen_usage[] = "bspray gen NAME [-s SIZE] [-t N] [-o FILE.nff]";
 
 static void print_gen_help(void)
 {
@@ -621,6 +621,9 @@ static void print_gen_help(void)
            "The output equals what Haines' SPD 3.14 programs print for the same size factor.\n"
            "\n"
            "  -s SIZE   the SPD size factor (default: the program's default)\n"
+           "  -t N, --tessellate N\n"
+           "            replace spheres and cones by triangle patches, N slices around\n"
+           "            (N = 2..64); like the SPD programs' -t, in bspray's own scheme\n"
            "  -o FILE   output file\n"
            "\n"
            "NAME, with default and valid sizes:\n",
@@ -632,14 +635,15 @@ static void print_gen_help(void)
         if (bsp_spd_scene_sizes(tok, &def, &lo, &hi))
             printf("  %-10s default %d, %d..%d\n", tok, def, lo, hi);
     }
-    printf("\nAny SCENE argument also accepts spd:NAME[:SIZE] directly, e.g. spd:tree:11.\n");
+    printf("\nAny SCENE argument also accepts spd:NAME[:SIZE][:tN] directly, e.g. spd:tree:11\n"
+           "or spd:balls:4:t8 (tessellated at level N, as gen -t N writes it).\n");
 }
 
 static int cmd_gen(int argc, char **argv)
 {
     args a = {argc, 1, argv, gen_usage};
     const char *name = NULL, *out_path = NULL;
-    int size = 0;
+    int size = 0, tessellate = 0;
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {
@@ -647,6 +651,8 @@ static int cmd_gen(int argc, char **argv)
             return 0;
         } else if (!strcmp(s, "-s") || !strcmp(s, "--size")) {
             size = parse_int(&a, s, 1, 100000);
+        } else if (!strcmp(s, "-t") || !strcmp(s, "--tessellate")) {
+            tessellate = parse_int(&a, s, 2, 64);
         } else if (!strcmp(s, "-o") || !strcmp(s, "--output")) {
             out_path = opt_value(&a, s);
         } else if (s[0] == '-' && s[1]) {
@@ -667,7 +673,7 @@ static int cmd_gen(int argc, char **argv)
         return EXIT_INPUT;
     }
     bsp_error err;
-    bsp_status st = bsp_spd_write_nff(name, size, out, &err);
+    bsp_status st = bsp_spd_write_nff(name, size, tessellate, out, &err);
     int rc = 0;
     if (st != BSP_OK) {
         fprintf(stderr, "%s: %s\n", prog, err.message);
@@ -687,6 +693,37 @@ static int cmd_gen(int argc, char **argv)
     return rc;
 }
 
+/* --- calibrate ---------------------------------------------------------------------------- */
+
+static int cmd_calibrate(int argc, char **argv)
+{
+    if (argc > 1 && is_help(argv[1])) {
+        printf("usage: bspray calibrate\n\n"
+               "Measure the cost of a kd-tree traversal step and of one ray-primitive test for\n"
+               "each primitive kind on this machine (ns), and print them with their ratios to\n"
+               "the traversal step: the T_i of the SAH cost model. The built-in defaults were\n"
+               "measured this way (src/accel/kd_cost.c). Run it on a quiet machine.\n");
+        return 0;
+    }
+    if (argc > 1)
+        die_usage("bspray calibrate", "unexpected argument '%s'", argv[1]);
+    bsp_sah_costs c;
+    bsp_error err;
+    if (bsp_calibrate_costs(&c, &err) != BSP_OK) {
+        fprintf(stderr, "%s: %s\n", prog, err.message);
+        return EXIT_INPUT;
+    }
+    printf("| cost | ns | relative to a traversal step |\n|---|---:|---:|\n");
+    printf("| traversal step | %.2f | 1 |\n", c.traversal);
+    printf("| sphere | %.2f | %.3f |\n", c.sphere, c.sphere / c.traversal);
+    printf("| triangle | %.2f | %.3f |\n", c.triangle, c.triangle / c.traversal);
+    printf("| polygon, base | %.2f | %.3f |\n", c.polygon_base, c.polygon_base / c.traversal);
+    printf("| polygon, per vertex | %.2f | %.3f |\n", c.polygon_vertex,
+           c.polygon_vertex / c.traversal);
+    printf("| cone | %.2f | %.3f |\n", c.cone, c.cone / c.traversal);
+    return 0;
+}
+
 /* --- main ----------------------------------------------------------------------------------- */
 
 static void print_main_help(FILE *f)
@@ -702,6 +739,7 @@ static void print_main_help(FILE *f)
             "  stats    what a scene contains\n"
             "  bench    build, validate and time acceleration methods (Markdown + CSV)\n"
             "  gen      write a built-in SPD scene as NFF\n"
+            "  calibrate  measure the SAH's per-primitive intersection costs on this machine\n"
             "\n"
             "SCENE is an NFF file (.nff, .nff.gz) or spd:NAME[:SIZE], a built-in SPD scene:\n"
             "  %s\n",
@@ -733,6 +771,8 @@ int main(int argc, char **argv)
         return cmd_gen(argc - 1, argv + 1);
     if (!strcmp(cmd, "bench"))
         return cmd_bench(argc - 1, argv + 1);
+    if (!strcmp(cmd, "calibrate"))
+        return cmd_calibrate(argc - 1, argv + 1);
     fprintf(stderr, "%s: unknown command '%s'\n", prog, cmd);
     print_main_help(stderr);
     return EXIT_USAGE;

@@ -1,5 +1,5 @@
 /*
- * spd.c — the SPD scene registry ("spd:NAME[:SIZE]"), the two sinks (one
+ * spd.c — the SPD scene registry ("spd:NAME[:SIZE][:tN]"), the two sinks (one
  * builds a bsp_scene through the public add_* calls, one prints NFF text the
  * way the SPD programs do) and the entry points declared in spd.h.
  */
@@ -110,6 +110,14 @@ static bsp_status bad_size(bsp_error *err, const spd_entry *e, const char *size_
                      "SPD scene '%s': bad size factor '%s' (valid sizes are %d to %d; "
                      "the default is %d)",
                      e->name, size_text, e->min, e->max, e->def);
+}
+
+static bsp_status bad_tess(bsp_error *err, const spd_entry *e, const char *text)
+{
+    return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                     "SPD scene '%s': bad tessellation '%.32s' (expected tN with a level N "
+                     "from %d to %d, as in spd:%s:%d:t8 or spd:%s:t8)",
+                     e->name, text, SPD_TESS_MIN, SPD_TESS_MAX, e->name, e->def, e->name);
 }
 
 /* Parses a decimal size factor (digits only) into *SIZE. */
@@ -278,6 +286,15 @@ static void sc_patch(spd_sink *s, const bsp_vec3 *v, const bsp_vec3 *nrm, int n)
     scene_check(s, bsp_scene_add_patch(c->scene, r, rn, (size_t)n, c->err));
 }
 
+/* Parses "tN" (or "TN") into T; returns 0 when TEXT is not that or N is
+ * out of range. */
+static int parse_tess(const char *text, spd_tess *t)
+{
+    int level;
+    return (text[0] == 't' || text[0] == 'T') && parse_size(text + 1, &level) &&
+           spd_tess_init(t, level);
+}
+
 bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error *err)
 {
     if (out)
@@ -286,7 +303,7 @@ bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error 
         return error_set(err, BSP_ERR_INVALID, NULL, 0, "spd: no scene specification given");
     if (strncmp(spec, "spd:", 4) != 0)
         return error_set(err, BSP_ERR_INVALID, NULL, 0,
-                         "'%.64s' is not an SPD scene (expected spd:NAME or spd:NAME:SIZE; "
+                         "'%.64s' is not an SPD scene (expected spd:NAME[:SIZE][:tN]; "
                          "known scenes: %s)",
                          spec, bsp_spd_scene_names());
     const char *name = spec + 4;
@@ -295,9 +312,29 @@ bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error 
     const spd_entry *e = find_entry(name, len);
     if (!e)
         return unknown_name(err, name, len);
+    /* up to two fields after the name: SIZE, tN, or SIZE:tN */
     int size = e->def;
-    if (colon && (!parse_size(colon + 1, &size) || size < e->min || size > e->max))
-        return bad_size(err, e, colon + 1);
+    spd_tess tess;
+    const spd_tess *tp = NULL;
+    if (colon) {
+        const char *field = colon + 1, *next = strchr(field, ':');
+        if (!next && (field[0] == 't' || field[0] == 'T')) {
+            next = field; /* spd:NAME:tN */
+        } else {
+            char size_text[32];
+            size_t n = next ? (size_t)(next - field) : strlen(field);
+            snprintf(size_text, sizeof size_text, "%.*s", (int)(n < 31 ? n : 31), field);
+            if (n > 31 || !parse_size(size_text, &size) || size < e->min || size > e->max)
+                return bad_size(err, e, n > 31 ? field : size_text);
+            if (next)
+                next++;
+        }
+        if (next) {
+            if (!parse_tess(next, &tess))
+                return bad_tess(err, e, next);
+            tp = &tess;
+        }
+    }
 
     bsp_scene *scene = bsp_scene_create();
     if (!scene)
@@ -306,6 +343,7 @@ bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error 
     spd_sink sink = {.ctx = &ctx,
                      .failed = BSP_OK,
                      .gen_error = NULL,
+                     .tess = tp,
                      .background = sc_background,
                      .view = sc_view,
                      .light = sc_light,
@@ -388,7 +426,8 @@ static void nf_patch(spd_sink *s, const bsp_vec3 *v, const bsp_vec3 *nrm, int n)
                              nrm[i].y, nrm[i].z));
 }
 
-bsp_status bsp_spd_write_nff(const char *name, int size, FILE *out, bsp_error *err)
+bsp_status bsp_spd_write_nff(const char *name, int size, int tessellate, FILE *out,
+                             bsp_error *err)
 {
     if (!name || !out)
         return error_set(err, BSP_ERR_INVALID, NULL, 0, "spd: no scene name or no output");
@@ -402,9 +441,16 @@ bsp_status bsp_spd_write_nff(const char *name, int size, FILE *out, bsp_error *e
         snprintf(text, sizeof text, "%d", size);
         return bad_size(err, e, text);
     }
+    spd_tess tess;
+    if (tessellate != 0 && !spd_tess_init(&tess, tessellate)) {
+        char text[32];
+        snprintf(text, sizeof text, "t%d", tessellate);
+        return bad_tess(err, e, text);
+    }
     spd_sink sink = {.ctx = out,
                      .failed = BSP_OK,
                      .gen_error = NULL,
+                     .tess = tessellate ? &tess : NULL,
                      .background = nf_background,
                      .view = nf_view,
                      .light = nf_light,

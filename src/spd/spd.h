@@ -22,6 +22,53 @@
 
 #define SPD_HIDDEN __attribute__((visibility("hidden")))
 
+/* --- tessellation ("spd:NAME[:SIZE]:tN", the SPD programs' -t) ------------
+ *
+ * At level N (SPD_TESS_MIN..SPD_TESS_MAX) every sphere and every cone or
+ * cylinder becomes polygonal patches (NFF "pp" triangles) carrying the true
+ * outward surface normal at each vertex, emitted in place of the primitive;
+ * polygons and patches pass unchanged. Every vertex lies on the original
+ * surface, so the result is inscribed in it.
+ *
+ * Sphere: a latitude/longitude grid about the world z axis with N slices
+ * (longitude 2 pi i / N, i = 0 at +x, increasing counterclockwise seen from
+ * +z) and M = max(2, ceil(N / 2)) bands (colatitude pi j / M from +z).
+ * Bands are emitted from +z down, each slice in order: the two polar bands
+ * as triangle fans around the pole vertex (one triangle per slice, so no
+ * degenerate triangle is produced), every other band as two triangles per
+ * quad, split along the diagonal from (j, i) to (j + 1, i + 1). That is
+ * 2 N (M - 1) triangles per sphere (48 at N = 8).
+ *
+ * Cone: N quads around the axis (base to apex, in a right-handed frame
+ * (u, v, axis) with u perpendicular to the axis and to the world axis the
+ * axis is least aligned with), each split into two triangles along the
+ * diagonal from base vertex i to apex vertex i + 1; open ends, as NFF cones
+ * have. When one end's radius is zero that end is a point and each slice
+ * is one triangle (the fan around it), its normal there the one at the
+ * slice's mid angle: 2 N triangles per cone, N with a pointed end.
+ *
+ * Triangles wind counterclockwise seen from outside. A negative radius
+ * (NFF's inside-only surface; no SPD generator emits one) is tessellated
+ * like its absolute value. A degenerate or non-finite sphere or cone (which
+ * the scene drops or refuses) is passed on untessellated. */
+
+#define SPD_TESS_MIN 2
+#define SPD_TESS_MAX 64
+
+typedef struct spd_tess {
+    int slices; /* N */
+    int bands;  /* M */
+    /* angles 2 pi i / N and 2 pi (i + 1/2) / N; colatitudes pi j / M (values
+     * below 1e-15 in magnitude are snapped to 0, the poles are exact) */
+    double cos_lon[SPD_TESS_MAX], sin_lon[SPD_TESS_MAX];
+    double cos_mid[SPD_TESS_MAX], sin_mid[SPD_TESS_MAX];
+    double cos_lat[SPD_TESS_MAX / 2 + 1], sin_lat[SPD_TESS_MAX / 2 + 1];
+} spd_tess;
+
+/* Fills T for level LEVEL; returns 0 (T untouched) when LEVEL is out of
+ * range. */
+SPD_HIDDEN int spd_tess_init(spd_tess *t, int level);
+
 /* --- the sink ------------------------------------------------------------ */
 
 /* Where a generator writes. FAILED is BSP_OK until the first error, then
@@ -35,6 +82,7 @@ struct spd_sink {
     void *ctx;
     bsp_status failed;
     const char *gen_error; /* set by spd_fail */
+    const spd_tess *tess;  /* NULL, or tessellate spheres and cones (above) */
     void (*background)(spd_sink *s, const double rgb[3]);
     void (*view)(spd_sink *s, bsp_vec3 from, bsp_vec3 at, bsp_vec3 up, double angle,
                  double hither, int resx, int resy);
@@ -115,9 +163,9 @@ SPD_HIDDEN void spd_light(spd_sink *s, const double pos[3]);
  * ignored; KS_SPEC likewise; ANG is the highlight half-angle in degrees. */
 SPD_HIDDEN void spd_color(spd_sink *s, const double rgb[3], double ka, double kd, double ks,
                           double ks_spec, double ang, double kt, double ior);
-/* C: x, y, z, radius. */
+/* C: x, y, z, radius. With s->tess set: the patches of the tessellation. */
 SPD_HIDDEN void spd_sphere(spd_sink *s, const double c[4]);
-/* BASE, APEX: x, y, z, radius. */
+/* BASE, APEX: x, y, z, radius. With s->tess set: the patches. */
 SPD_HIDDEN void spd_cylcone(spd_sink *s, const double base[4], const double apex[4]);
 /* Like lib_output_polygon: first collapses adjacent vertices closer than
  * SPD_EPSILON2 (editing V in place, as SPD does) and drops the polygon when
@@ -162,10 +210,11 @@ SPD_HIDDEN void spd_gen_nurbtst(int size, spd_sink *out);
 
 /* --- entry points ------------------------------------------------------- */
 
-/* Builds the scene for SPEC, "spd:NAME" or "spd:NAME:SIZE" (NAME is matched
- * without regard to case). An unknown name or a size outside the scene's
- * range is BSP_ERR_INVALID with a message naming the known scenes or the
- * valid range. On success *OUT owns a new scene; on failure it is NULL. */
+/* Builds the scene for SPEC, "spd:NAME[:SIZE][:tN]" (NAME is matched
+ * without regard to case; tN, or TN, tessellates at level N as above). An
+ * unknown name, a size outside the scene's range or a bad tessellation is
+ * BSP_ERR_INVALID with a message naming the known scenes or the valid
+ * range. On success *OUT owns a new scene; on failure it is NULL. */
 SPD_HIDDEN bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out,
                                               bsp_error *err);
 

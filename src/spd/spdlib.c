@@ -4,7 +4,8 @@
  * operations in the same order, so the generated numbers match Haines'
  * programs bit for bit), the Phong exponent rule, and the emit helpers that
  * apply SPD's output-time rules (polygon vertex collapsing, patch splitting)
- * before handing entities to a sink.
+ * before handing entities to a sink, tessellating spheres and cones into
+ * patches when the sink asks for it (the scheme is described in spd.h).
  *
  * Bit-for-bit agreement assumes plain IEEE double arithmetic without fused
  * multiply-adds, which is what gcc and clang emit for x86-64 by default
@@ -190,15 +191,189 @@ void spd_color(spd_sink *s, const double rgb[3], double ka, double kd, double ks
         s->material(s, rgb, kd, ks, spd_phong(ang), kt, ior);
 }
 
-void spd_sphere(spd_sink *s, const double c[4])
+/* --- tessellation ------------------------------------------------------------ */
+
+/* sin/cos of A, with round-off residue at the multiples of pi/2 made 0. */
+static void tess_sincos(double a, double *sn, double *cs)
+{
+    *sn = sin(a);
+    *cs = cos(a);
+    if (fabs(*sn) < 1e-15)
+        *sn = 0.0;
+    if (fabs(*cs) < 1e-15)
+        *cs = 0.0;
+}
+
+int spd_tess_init(spd_tess *t, int level)
+{
+    if (level < SPD_TESS_MIN || level > SPD_TESS_MAX)
+        return 0;
+    t->slices = level;
+    t->bands = (level + 1) / 2 < 2 ? 2 : (level + 1) / 2;
+    for (int i = 0; i < level; i++) {
+        tess_sincos(2.0 * SPD_PI * i / level, &t->sin_lon[i], &t->cos_lon[i]);
+        tess_sincos(2.0 * SPD_PI * (i + 0.5) / level, &t->sin_mid[i], &t->cos_mid[i]);
+    }
+    for (int j = 0; j <= t->bands; j++)
+        tess_sincos(SPD_PI * j / t->bands, &t->sin_lat[j], &t->cos_lat[j]);
+    t->sin_lat[0] = t->sin_lat[t->bands] = 0.0;
+    t->cos_lat[0] = 1.0;
+    t->cos_lat[t->bands] = -1.0;
+    return 1;
+}
+
+/* One triangle patch (V, N: three points and normals each). */
+static void tess_emit(spd_sink *s, const bsp_vec3 v[3], const bsp_vec3 n[3])
 {
     if (!s->failed)
+        s->patch(s, v, n, 3);
+}
+
+static int v3_finite(bsp_vec3 a)
+{
+    return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
+}
+
+/* Grid point (J, I) of the sphere C, R: its position and unit normal. */
+static void sphere_point(const spd_tess *t, bsp_vec3 c, double r, int j, int i, bsp_vec3 *p,
+                         bsp_vec3 *n)
+{
+    *n = bsp_v3(t->sin_lat[j] * t->cos_lon[i], t->sin_lat[j] * t->sin_lon[i], t->cos_lat[j]);
+    *p = bsp_v3(c.x + r * n->x, c.y + r * n->y, c.z + r * n->z);
+}
+
+static void tess_sphere(spd_sink *s, bsp_vec3 c, double radius)
+{
+    const spd_tess *t = s->tess;
+    double r = fabs(radius);
+    if (!(r > 0.0) || !isfinite(r) || !v3_finite(c)) {
+        s->sphere(s, c, radius); /* the scene drops or refuses it as usual */
+        return;
+    }
+    const int nsl = t->slices, m = t->bands;
+    bsp_vec3 v[3], n[3];
+    for (int j = 0; j < m && !s->failed; j++) {
+        for (int i = 0; i < nsl && !s->failed; i++) {
+            int i1 = i + 1 < nsl ? i + 1 : 0;
+            if (j == 0) { /* fan around +z */
+                sphere_point(t, c, r, 0, 0, &v[0], &n[0]);
+                sphere_point(t, c, r, 1, i, &v[1], &n[1]);
+                sphere_point(t, c, r, 1, i1, &v[2], &n[2]);
+                tess_emit(s, v, n);
+            } else if (j == m - 1) { /* fan around -z */
+                sphere_point(t, c, r, j, i, &v[0], &n[0]);
+                sphere_point(t, c, r, m, 0, &v[1], &n[1]);
+                sphere_point(t, c, r, j, i1, &v[2], &n[2]);
+                tess_emit(s, v, n);
+            } else {
+                sphere_point(t, c, r, j, i, &v[0], &n[0]);
+                sphere_point(t, c, r, j + 1, i, &v[1], &n[1]);
+                sphere_point(t, c, r, j + 1, i1, &v[2], &n[2]);
+                tess_emit(s, v, n);
+                v[1] = v[2];
+                n[1] = n[2];
+                sphere_point(t, c, r, j, i1, &v[2], &n[2]);
+                tess_emit(s, v, n);
+            }
+        }
+    }
+}
+
+/* The frame of a cone: unit axis W, and U, V with (U, V, W) right-handed. */
+typedef struct cone_frame {
+    double u[3], v[3], w[3];
+    double nd, nw; /* normal = nd * (radial direction) + nw * W */
+} cone_frame;
+
+/* Point at angle (COS, SIN) on the circle of radius R about CENTER, and the
+ * surface normal there. */
+static void cone_point(const cone_frame *f, bsp_vec3 center, double r, double cs, double sn,
+                       bsp_vec3 *p, bsp_vec3 *n)
+{
+    double d[3];
+    for (int k = 0; k < 3; k++)
+        d[k] = f->u[k] * cs + f->v[k] * sn;
+    *p = bsp_v3(center.x + r * d[0], center.y + r * d[1], center.z + r * d[2]);
+    *n = bsp_v3(f->nd * d[0] + f->nw * f->w[0], f->nd * d[1] + f->nw * f->w[1],
+                f->nd * d[2] + f->nw * f->w[2]);
+}
+
+static void tess_cone(spd_sink *s, bsp_vec3 base, double base_r, bsp_vec3 apex,
+                      double apex_r)
+{
+    const spd_tess *t = s->tess;
+    double rb = fabs(base_r), ra = fabs(apex_r);
+    cone_frame f;
+    f.w[0] = apex.x - base.x;
+    f.w[1] = apex.y - base.y;
+    f.w[2] = apex.z - base.z;
+    double h = spd_normalize(f.w);
+    if (!(h > 0.0) || !isfinite(h) || !isfinite(rb) || !isfinite(ra) ||
+        (rb == 0.0 && ra == 0.0) || !v3_finite(base) || !v3_finite(apex)) {
+        s->cone(s, base, base_r, apex, apex_r); /* dropped or refused as usual */
+        return;
+    }
+    /* U: perpendicular to W and to the world axis W is least aligned with */
+    int least = 0;
+    for (int k = 1; k < 3; k++)
+        if (fabs(f.w[k]) < fabs(f.w[least]))
+            least = k;
+    double e[3] = {0.0, 0.0, 0.0};
+    e[least] = 1.0;
+    spd_cross(f.u, f.w, e);
+    spd_normalize(f.u);
+    spd_cross(f.v, f.w, f.u);
+    /* the normal leans towards the apex by (rb - ra) / h */
+    double len = sqrt(h * h + (rb - ra) * (rb - ra));
+    f.nd = h / len;
+    f.nw = (rb - ra) / len;
+
+    const int nsl = t->slices;
+    bsp_vec3 v[3], n[3];
+    for (int i = 0; i < nsl && !s->failed; i++) {
+        int i1 = i + 1 < nsl ? i + 1 : 0;
+        double c0 = t->cos_lon[i], s0 = t->sin_lon[i];
+        double c1 = t->cos_lon[i1], s1 = t->sin_lon[i1];
+        if (ra == 0.0) { /* fan around the apex */
+            cone_point(&f, base, rb, c0, s0, &v[0], &n[0]);
+            cone_point(&f, base, rb, c1, s1, &v[1], &n[1]);
+            cone_point(&f, apex, 0.0, t->cos_mid[i], t->sin_mid[i], &v[2], &n[2]);
+            tess_emit(s, v, n);
+        } else if (rb == 0.0) { /* fan around the base point */
+            cone_point(&f, base, 0.0, t->cos_mid[i], t->sin_mid[i], &v[0], &n[0]);
+            cone_point(&f, apex, ra, c1, s1, &v[1], &n[1]);
+            cone_point(&f, apex, ra, c0, s0, &v[2], &n[2]);
+            tess_emit(s, v, n);
+        } else {
+            cone_point(&f, base, rb, c0, s0, &v[0], &n[0]);
+            cone_point(&f, base, rb, c1, s1, &v[1], &n[1]);
+            cone_point(&f, apex, ra, c1, s1, &v[2], &n[2]);
+            tess_emit(s, v, n);
+            v[1] = v[2];
+            n[1] = n[2];
+            cone_point(&f, apex, ra, c0, s0, &v[2], &n[2]);
+            tess_emit(s, v, n);
+        }
+    }
+}
+
+void spd_sphere(spd_sink *s, const double c[4])
+{
+    if (s->failed)
+        return;
+    if (s->tess)
+        tess_sphere(s, v3_of(c), c[3]);
+    else
         s->sphere(s, v3_of(c), c[3]);
 }
 
 void spd_cylcone(spd_sink *s, const double base[4], const double apex[4])
 {
-    if (!s->failed)
+    if (s->failed)
+        return;
+    if (s->tess)
+        tess_cone(s, v3_of(base), base[3], v3_of(apex), apex[3]);
+    else
         s->cone(s, v3_of(base), base[3], v3_of(apex), apex[3]);
 }
 
