@@ -36,7 +36,8 @@ typedef enum mesh_number {
 } mesh_number;
 
 /* Reads S[0..LEN) (not NUL-terminated) as a decimal number: the value strtod
- * gives, bit for bit; hex, nan and inf are refused. */
+ * gives, bit for bit; hex, nan and inf are refused. Shared by the NFF, OBJ
+ * and PLY readers. */
 HIDDEN mesh_number mesh_parse_number(const char *s, size_t len, double *out);
 
 /* Reads S[0..LEN) as [+-]?[0-9]+, saturated at +-10^18; 0 if it is not one. */

@@ -48,6 +48,7 @@
 
 #include <zlib.h>
 
+#include "scene/mesh.h"
 #include "scene/scene_internal.h"
 
 /* Largest input accepted, as read and as inflated. */
@@ -214,167 +215,13 @@ static const char *token_show(const token *t, char *buf, size_t size)
 
 /* --- numbers ---------------------------------------------------------------- */
 
-typedef enum number_kind { NUM_OK = 0, NUM_MALFORMED, NUM_NONFINITE } number_kind;
-
-/* Clinger's fast path is exact only when double arithmetic is not carried
- * out in a wider format. */
-#if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD == 0
-#define NFF_FAST_PATH 1
-#else
-#define NFF_FAST_PATH 0
-#endif
-
-static const double exact_pow10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
-                                       1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-                                       1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-
-static int lower(char c)
-{
-    return c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c;
-}
-
-/* Case-insensitive comparison of S[0..LEN) with the lower-case WORD. */
-static int word_is(const char *s, size_t len, const char *word)
-{
-    size_t n = strlen(word);
-    if (len != n)
-        return 0;
-    for (size_t i = 0; i < n; i++)
-        if (lower(s[i]) != word[i])
-            return 0;
-    return 1;
-}
-
-/* Reads the token S[0..LEN) as a decimal number. The value is the one
- * strtod gives (correctly rounded): simple cases are computed exactly by
- * Clinger's fast path, the others are handed to strtod. */
-static number_kind parse_number(const char *s, size_t len, double *out)
-{
-    size_t i = 0;
-    int neg = 0;
-    if (i < len && (s[i] == '+' || s[i] == '-')) {
-        neg = s[i] == '-';
-        i++;
-    }
-    const size_t body = i;
-    uint64_t mant = 0;
-    int ndig = 0, slow = 0, any = 0;
-    long exp10 = 0;
-    for (; i < len && is_digit(s[i]); i++) {
-        any = 1;
-        unsigned d = (unsigned)(s[i] - '0');
-        if (mant || d) {
-            if (ndig == 19) {
-                slow = 1;
-            } else {
-                mant = mant * 10 + d;
-                ndig++;
-            }
-        }
-    }
-    if (i < len && s[i] == '.') {
-        i++;
-        for (; i < len && is_digit(s[i]); i++) {
-            any = 1;
-            unsigned d = (unsigned)(s[i] - '0');
-            if (mant || d) {
-                if (ndig == 19) {
-                    slow = 1;
-                    continue;
-                }
-                mant = mant * 10 + d;
-                ndig++;
-            }
-            exp10--;
-        }
-    }
-    if (!any) {
-        /* nan, nan(...), inf, infinity: what strtod would also accept */
-        const char *w = s + body;
-        size_t wl = len - body;
-        if (word_is(w, wl, "nan") || word_is(w, wl, "inf") || word_is(w, wl, "infinity") ||
-            (wl >= 5 && word_is(w, 4, "nan(") && w[wl - 1] == ')'))
-            return NUM_NONFINITE;
-        return NUM_MALFORMED;
-    }
-    if (i < len && (s[i] == 'e' || s[i] == 'E')) {
-        i++;
-        int eneg = 0;
-        if (i < len && (s[i] == '+' || s[i] == '-')) {
-            eneg = s[i] == '-';
-            i++;
-        }
-        if (i >= len || !is_digit(s[i]))
-            return NUM_MALFORMED;
-        long e = 0;
-        for (; i < len && is_digit(s[i]); i++)
-            if (e < 100000)
-                e = e * 10 + (s[i] - '0');
-        exp10 += eneg ? -e : e;
-    }
-    if (i != len)
-        return NUM_MALFORMED;
-
-    if (mant == 0 && !slow) {
-        *out = neg ? -0.0 : 0.0;
-        return NUM_OK;
-    }
-#if NFF_FAST_PATH
-    if (!slow && mant <= ((uint64_t)1 << 53) && exp10 >= -22 && exp10 <= 22) {
-        double v = (double)mant;
-        v = exp10 < 0 ? v / exact_pow10[-exp10] : v * exact_pow10[exp10];
-        *out = neg ? -v : v;
-        return NUM_OK;
-    }
-#else
-    (void)exact_pow10;
-#endif
-    char small[128];
-    char *copy = small;
-    if (len >= sizeof small) {
-        copy = malloc(len + 1);
-        if (!copy)
-            return NUM_MALFORMED;
-    }
-    memcpy(copy, s, len);
-    copy[len] = '\0';
-    char *endp;
-    double v = strtod(copy, &endp);
-    int whole = endp == copy + len;
-    if (copy != small)
-        free(copy);
-    if (!whole)
-        return NUM_MALFORMED;
-    if (!isfinite(v))
-        return NUM_NONFINITE;
-    *out = v;
-    return NUM_OK;
-}
+/* Numbers are read by mesh_parse_number (scene/mesh.h), shared with the
+ * OBJ and PLY readers: the value strtod gives, bit for bit. */
 
 /* Reads the token as [+-]?[0-9]+ (saturated at +-10^18); 0 if it is not one. */
 static int parse_integer(const token *t, long long *out)
 {
-    if (!t->s)
-        return 0;
-    const char *s = t->s;
-    size_t len = t->len, i = 0;
-    int neg = 0;
-    if (i < len && (s[i] == '+' || s[i] == '-')) {
-        neg = s[i] == '-';
-        i++;
-    }
-    if (i == len)
-        return 0;
-    /* saturates at 10^18: every caller treats that as absurd */
-    const long long cap = 1000000000000000000LL;
-    long long v = 0;
-    for (; i < len; i++) {
-        if (!is_digit(s[i]))
-            return 0;
-        v = v <= (cap - 9) / 10 ? v * 10 + (s[i] - '0') : cap;
-    }
-    *out = neg ? -v : v;
-    return 1;
+    return t->s && mesh_parse_integer(t->s, t->len, out);
 }
 
 /* True when the token reads as a number, or is trying to be one. */
@@ -383,7 +230,7 @@ static int looks_numeric(const token *t)
     if (!t->s)
         return 0;
     double v;
-    if (parse_number(t->s, t->len, &v) != NUM_MALFORMED)
+    if (mesh_parse_number(t->s, t->len, &v) != MESH_NUM_MALFORMED)
         return 1;
     char c = t->s[0];
     return is_digit(c) || c == '+' || c == '-' || c == '.';
@@ -427,11 +274,11 @@ static bsp_status read_numbers(parser *P, const char *what, size_t rec_line, siz
         const token t = P->tok;
         if (!t.s)
             return truncated(P, what, rec_line, expected, &t);
-        number_kind r = parse_number(t.s, t.len, &out[i]);
-        if (r != NUM_OK) {
+        mesh_number r = mesh_parse_number(t.s, t.len, &out[i]);
+        if (r != MESH_NUM_OK) {
             char shown[SHOW_SIZE];
             token_show(&t, shown, sizeof shown);
-            if (r == NUM_NONFINITE)
+            if (r == MESH_NUM_NONFINITE)
                 return fail(P, BSP_ERR_INVALID, t.line, "non-finite number %s in %s", shown, what);
             if (token_keyword(&t) != KW_NONE)
                 return truncated(P, what, rec_line, expected, &t);
@@ -486,7 +333,7 @@ static bsp_status read_view(parser *P, size_t vline)
                 return truncated(P, what, t.line, 2, &r);
             if (!parse_integer(&r, &res[i])) {
                 token_show(&r, shown, sizeof shown);
-                if (parse_number(r.s, r.len, &vals[5][0]) == NUM_NONFINITE)
+                if (mesh_parse_number(r.s, r.len, &vals[5][0]) == MESH_NUM_NONFINITE)
                     return fail(P, BSP_ERR_INVALID, r.line, "non-finite number %s in %s", shown,
                                 what);
                 return fail(P, BSP_ERR_PARSE, r.line,
