@@ -139,6 +139,18 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
             bsp_build_options_defaults(&o);
             o.kind = (bsp_accel_kind)k;
             o.mailbox = mb;
+            if (!bsp_scene_camera(scene)) {
+                /* the view rules need a view: one from inside the scene's
+                 * box (its cells containing the eye see every ray), looking
+                 * along no axis */
+                bsp_box sb = bsp_scene_bounds(scene);
+                o.view.explicit_view = 1;
+                o.view.eye = box_is_empty(sb) ? bsp_v3(0, 0, 0)
+                                              : v3_scale(v3_add(sb.lo, sb.hi), 0.5);
+                o.view.dir = bsp_v3(0.3, -1.0, 0.2);
+                o.view.up = bsp_v3(0, 0, 1);
+                o.view.fov_deg = 70.0;
+            }
             bsp_status st = bsp_accel_build(scene, &o, &acc[nv], &err);
             CHECK_MSG(st == BSP_OK, "%s: build %s: %s", name, bsp_accel_kind_name(o.kind),
                       err.message);
@@ -411,7 +423,7 @@ TEST(kd_empty_scene_and_single_primitive)
  * variant's answer against it (test-only: it plugs into accel_internal.h).
  * Each render thread makes its own inner queries (thread-local), registered
  * so that they can be freed afterwards. */
-#define CHECKED_MAX 8
+#define CHECKED_MAX (2 * BSP_ACCEL_KIND_COUNT)
 #define CHECKED_MAX_THREADS 64
 
 typedef struct checked_impl {

@@ -38,7 +38,7 @@ TEST(camera_spd_corner_rays_span_the_angle)
     CHECK_EQ_INT(w, 513);
     CHECK_EQ_INT(h, 513);
     camera_rays cr;
-    camera_rays_init(&cr, &c, w, h, BSP_SAMPLING_SPD);
+    camera_rays_init(&cr, &c, w, h, BSP_SAMPLING_SPD, 0.0);
     /* first and last ray of the middle row are 45 degrees apart */
     bsp_ray left = camera_ray(&cr, 0, 256), right = camera_ray(&cr, 512, 256);
     CHECK_NEAR(angle_between(left.dir, right.dir), 45.0, 1e-9);
@@ -59,7 +59,7 @@ TEST(camera_pixel_centres_span_the_outer_edges)
     camera_default_size(&c, BSP_SAMPLING_CENTRES, &w, &h);
     CHECK_EQ_INT(w, 512);
     camera_rays cr;
-    camera_rays_init(&cr, &c, 4, 4, BSP_SAMPLING_CENTRES);
+    camera_rays_init(&cr, &c, 4, 4, BSP_SAMPLING_CENTRES, 0.0);
     /* 4 pixels over tan(45) = 1 on each side: centres at -0.75, -0.25, 0.25, 0.75 */
     bsp_ray r = camera_ray(&cr, 0, 0);
     CHECK_NEAR(r.dir.x / -r.dir.z, -0.75, 1e-15);
@@ -74,7 +74,7 @@ TEST(camera_up_need_not_be_perpendicular)
     /* lattice-like: up (0.2, 1, 0) is not perpendicular to the view */
     bsp_camera c = make_camera(bsp_v3(0, 1, 1), bsp_v3(0, -1, -1), bsp_v3(0.2, 1, 0), 60, 8);
     camera_rays cr;
-    camera_rays_init(&cr, &c, 9, 9, BSP_SAMPLING_SPD);
+    camera_rays_init(&cr, &c, 9, 9, BSP_SAMPLING_SPD, 0.0);
     CHECK_NEAR(v3_dot(cr.forward, cr.right), 0, 1e-15);
     CHECK_NEAR(v3_dot(cr.forward, cr.up), 0, 1e-15);
     CHECK_NEAR(v3_dot(cr.right, cr.up), 0, 1e-15);

@@ -29,8 +29,10 @@
 static const char render_usage[] =
     "bspray render SCENE [-o OUT.png|OUT.ppm] [--res N | --size WxH] [--depth N]\n"
     "                    [--sampling spd|centres] [--accel METHOD] [--mailbox on|off]\n"
+    "                    [--max-depth N] [--leaf-size N] [--mixed-share F]\n"
     "                    [--threads N] [--stats-json FILE] [--quiet]\n"
-    "                    [--eye X,Y,Z] [--at X,Y,Z] [--up X,Y,Z] [--fov DEG]";
+    "                    [--eye X,Y,Z] [--at X,Y,Z | --dir X,Y,Z] [--up X,Y,Z] [--fov DEG]\n"
+    "                    [--ortho W|auto]";
 
 static const char render_help[] =
     "Render SCENE with the Whitted ray tracer of the SPD and print its ray statistics.\n"
@@ -53,13 +55,9 @@ static const char render_help[] =
     "  --depth N          maximum ray depth: primary rays have depth 0 and spawn reflected\n"
     "                     and refracted rays while below N (default 4, the paper's and\n"
     "                     Havran's setting; the SPD Readme calls it depth 5)\n"
-    "  --accel METHOD     acceleration method: sah (default), kaplan, naive\n"
-    "  --mailbox on|off   test each primitive at most once per ray (default on)\n"
     "  --threads N        worker threads (default: all cores); the image does not depend on it\n"
     "  --stats-json FILE  also write the statistics as JSON\n"
-    "  --quiet            print no statistics table\n"
-    "  --eye, --at, --up X,Y,Z   override the camera (any of them; for meshes, the rest\n"
-    "                     of the default view adapts); --fov DEG its field of view\n";
+    "  --quiet            print no statistics table\n";
 
 typedef struct progress_ctx {
     progress_bar *bar;
@@ -200,10 +198,8 @@ static int cmd_render(int argc, char **argv)
 {
     args a = {argc, 1, argv, render_usage};
     const char *scene_path = NULL, *out_path = "out.png", *json_path = NULL;
-    int quiet = 0, view_given = 0;
-    bsp_vec3 eye, at, up;
-    int has_eye = 0, has_at = 0, has_up = 0;
-    double fov = 0;
+    int quiet = 0;
+    view_args view = {0};
     bsp_build_options bopts;
     bsp_build_options_defaults(&bopts);
     bsp_render_options ropts;
@@ -211,7 +207,8 @@ static int cmd_render(int argc, char **argv)
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {
-            printf("usage: %s\n\n%s", render_usage, render_help);
+            printf("usage: %s\n\n%s%s%s", render_usage, render_help, build_args_help,
+                   view_args_help);
             return 0;
         } else if (!strcmp(s, "-o") || !strcmp(s, "--output")) {
             out_path = opt_value(&a, s);
@@ -239,30 +236,12 @@ static int cmd_render(int argc, char **argv)
                 ropts.sampling = BSP_SAMPLING_CENTRES;
             else
                 die_usage(a.usage, "option '--sampling' takes spd or centres, got '%s'", v);
-        } else if (!strcmp(s, "--accel")) {
-            parse_accel(&a, &bopts);
-        } else if (!strcmp(s, "--mailbox")) {
-            bopts.mailbox = parse_on_off(&a, s);
+        } else if (parse_build_arg(&a, &bopts) || parse_view_arg(&a, &view)) {
+            continue;
         } else if (!strcmp(s, "--stats-json")) {
             json_path = opt_value(&a, s);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             quiet = 1;
-        } else if (!strcmp(s, "--eye")) {
-            eye = parse_vec3(&a, s);
-            has_eye = view_given = 1;
-        } else if (!strcmp(s, "--at")) {
-            at = parse_vec3(&a, s);
-            has_at = view_given = 1;
-        } else if (!strcmp(s, "--up")) {
-            up = parse_vec3(&a, s);
-            has_up = view_given = 1;
-        } else if (!strcmp(s, "--fov")) {
-            const char *v = opt_value(&a, s);
-            char *end;
-            fov = strtod(v, &end);
-            if (end == v || *end || !(fov > 0 && fov < 180))
-                die_usage(a.usage, "option '--fov' needs degrees in (0, 180), got '%s'", v);
-            view_given = 1;
         } else if (s[0] == '-' && s[1]) {
             die_usage(a.usage, "unknown option '%s'", s);
         } else if (!scene_path) {
@@ -275,15 +254,7 @@ static int cmd_render(int argc, char **argv)
         die_usage(a.usage, "%s", "missing SCENE");
 
     bsp_scene *scene = load_scene(scene_path);
-    if (view_given) {
-        bsp_error verr;
-        if (bsp_scene_set_default_view(scene, has_eye ? &eye : NULL, has_at ? &at : NULL,
-                                       has_up ? &up : NULL, fov, &verr) != BSP_OK) {
-            fprintf(stderr, "%s: %s\n", prog, verr.message);
-            bsp_scene_destroy(scene);
-            return EXIT_INPUT;
-        }
-    }
+    apply_view_args(scene, scene_path, &view, &bopts, &ropts);
     if (!bsp_scene_camera(scene)) {
         fprintf(stderr, "%s: %s: the scene has no camera ('v' block); cannot render\n", prog,
                 scene_path);
@@ -469,7 +440,9 @@ static int cmd_trace(int argc, char **argv)
 /* --- stats --------------------------------------------------------------------------- */
 
 static const char stats_usage[] =
-    "bspray stats SCENE [--accel METHOD] [--max-depth N] [--leaf-size N] [--check]";
+    "bspray stats SCENE [--accel METHOD] [--max-depth N] [--leaf-size N] [--check]\n"
+    "                   [--eye X,Y,Z] [--at X,Y,Z | --dir X,Y,Z] [--up X,Y,Z] [--fov DEG]\n"
+    "                   [--ortho W|auto]";
 static const char stats_help[] =
     "Print what SCENE contains: primitives by kind (with polygon vertex counts), bounds,\n"
     "camera, lights, materials, background, and load warnings. With --accel, also build\n"
@@ -477,30 +450,26 @@ static const char stats_help[] =
     "leaves, N_EV empty leaves, N_OIV references in leaves, leaf depths, bytes, the expected\n"
     "SAH cost, build time T_B).\n"
     "\n"
-    "  --accel METHOD   naive, kaplan, sah, ...\n"
-    "  --max-depth N    kd-tree depth limit (default: the method's)\n"
-    "  --leaf-size N    at most N primitives make a leaf (default: the method's)\n"
-    "  --check          run the tree invariant checker too\n";
+    "  --check            run the tree invariant checker too\n";
 
 static int cmd_stats(int argc, char **argv)
 {
     args a = {argc, 1, argv, stats_usage};
     const char *scene_path = NULL;
     int want_tree = 0, check = 0;
+    view_args view = {0};
     bsp_build_options bopts;
     bsp_build_options_defaults(&bopts);
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {
-            printf("usage: %s\n\n%s", stats_usage, stats_help);
+            printf("usage: %s\n\n%s%s%s", stats_usage, stats_help, build_args_help,
+                   view_args_help);
             return 0;
-        } else if (!strcmp(s, "--accel")) {
-            parse_accel(&a, &bopts);
+        } else if (parse_build_arg(&a, &bopts)) {
             want_tree = 1;
-        } else if (!strcmp(s, "--max-depth")) {
-            bopts.max_depth = parse_int(&a, s, 1, BSP_KD_MAX_DEPTH_LIMIT);
-        } else if (!strcmp(s, "--leaf-size")) {
-            bopts.max_leaf_prims = parse_int(&a, s, 1, 1 << 20);
+        } else if (parse_view_arg(&a, &view)) {
+            continue;
         } else if (!strcmp(s, "--check")) {
             check = 1;
         } else if (s[0] == '-' && s[1]) {
@@ -514,6 +483,7 @@ static int cmd_stats(int argc, char **argv)
     if (!scene_path)
         die_usage(a.usage, "%s", "missing SCENE");
     bsp_scene *scene = load_scene(scene_path);
+    apply_view_args(scene, scene_path, &view, &bopts, NULL);
     size_t n = bsp_scene_prim_count(scene);
     printf("scene: %s\n", scene_path);
     printf("primitives: %zu\n", n);
@@ -740,6 +710,7 @@ static void print_main_help(FILE *f)
             "  bench    build, validate and time acceleration methods (Markdown + CSV)\n"
             "  gen      write a built-in SPD scene as NFF\n"
             "  calibrate  measure the SAH's per-primitive intersection costs on this machine\n"
+            "  viz      pictures of a kd-tree's cells: camera view and top view (PNG)\n"
             "\n"
             "SCENE is an NFF file (.nff, .nff.gz) or spd:NAME[:SIZE], a built-in SPD scene:\n"
             "  %s\n",
@@ -773,6 +744,8 @@ int main(int argc, char **argv)
         return cmd_bench(argc - 1, argv + 1);
     if (!strcmp(cmd, "calibrate"))
         return cmd_calibrate(argc - 1, argv + 1);
+    if (!strcmp(cmd, "viz"))
+        return cmd_viz(argc - 1, argv + 1);
     fprintf(stderr, "%s: unknown command '%s'\n", prog, cmd);
     print_main_help(stderr);
     return EXIT_USAGE;

@@ -31,6 +31,31 @@ int is_help(const char *s);
 bsp_vec3 parse_vec3(args *a, const char *opt);
 /* --accel METHOD into OPTS->kind, or a usage error listing the methods. */
 void parse_accel(args *a, bsp_build_options *opts);
+/* Options that choose and tune the acceleration structure: --accel,
+ * --mailbox, --max-depth, --leaf-size, --mixed-share. Consumes the option at
+ * a->argv[a->i] (and its value) and returns 1, or returns 0 for any other. */
+int parse_build_arg(args *a, bsp_build_options *opts);
+/* Help text of those options (one line each, indented like the commands'). */
+extern const char build_args_help[];
+
+/* The camera overrides --eye, --at, --dir, --up, --fov and --ortho. */
+typedef struct view_args {
+    int given; /* any of eye/at/dir/up/fov */
+    int has_eye, has_at, has_dir, has_up;
+    bsp_vec3 eye, at, dir, up;
+    double fov;
+    int ortho;          /* --ortho given */
+    double ortho_width; /* its width; 0: auto */
+} view_args;
+/* Consumes one of those options like parse_build_arg. */
+int parse_view_arg(args *a, view_args *v);
+extern const char view_args_help[];
+/* Applies V to SCENE's camera (loaded from PATH), to the view of the modified
+ * SAH rules in BOPTS and to the render options RO (either may be NULL); exits
+ * 1 with a message when the result is not a valid camera. */
+void apply_view_args(bsp_scene *scene, const char *path, const view_args *v,
+                     bsp_build_options *bopts, bsp_render_options *ro);
+
 /* Loads PATH (printing its warnings) or exits 1 with the message. */
 bsp_scene *load_scene(const char *path);
 /* Builds or exits 1 with the message. */
@@ -40,5 +65,6 @@ double now_seconds(void);
 
 /* The subcommands. */
 int cmd_bench(int argc, char **argv);
+int cmd_viz(int argc, char **argv);
 
 #endif /* BSPRAY_TOOLS_CLI_H */

@@ -29,6 +29,13 @@ typedef enum bsp_accel_kind {
     BSP_ACCEL_KAPLAN,    /* kd-tree, Kaplan's rule: spatial median, axes x, y, z in turn */
     BSP_ACCEL_SAH,       /* kd-tree, surface area heuristic (MacDonald & Booth), exact
                             O(N log N) build with perfect splits (Wald & Havran 2006) */
+    BSP_ACCEL_SAH_PER,   /* kd-tree, the paper's modified SAH for rays from one eye
+                            (perspective): probability = projected area clipped to the
+                            viewport; see bsp_view */
+    BSP_ACCEL_SAH_PAR,   /* kd-tree, modified SAH for rays of one direction (parallel
+                            projection): projected area along it, clipped to the window */
+    BSP_ACCEL_SAH_MIXED, /* kd-tree, SAH whose probability mixes the PER measure (primary
+                            rays) and the surface area (all other rays) by their share */
     BSP_ACCEL_KIND_COUNT
 } bsp_accel_kind;
 
@@ -50,6 +57,23 @@ typedef struct bsp_sah_costs {
     double cone;           /* one ray-cone (cylinder) test */
 } bsp_sah_costs;
 
+/* The restricted ray set of sah-per, sah-par and sah-mixed: the camera the
+ * tree is built for. With explicit == 0 it is the scene's own camera (NFF
+ * from/at/up/angle/resolution, SPD protocol: the angle spans the first to
+ * the last of res+1 rays); bsp_accel_build fails when the scene has none. */
+typedef struct bsp_view {
+    int explicit_view;  /* 1: the fields below; 0: the scene's camera */
+    bsp_vec3 eye;       /* PER: the rays' common origin. PAR: the centre of the window,
+                           on the plane the rays start from */
+    bsp_vec3 dir;       /* the view direction (PAR: the rays' common direction) */
+    bsp_vec3 up;        /* not parallel to dir */
+    double fov_deg;     /* PER: full horizontal angle from the first to the last ray */
+    int width, height;  /* rays across and down (only the ratio matters) */
+    double ortho_width; /* PAR: the window's width in scene units; 0: the width of the
+                           perspective view at the look-at point, 2 tan(fov/2) |at - eye|
+                           (for an explicit view |dir| stands for |at - eye|) */
+} bsp_view;
+
 /* Build options; always start from bsp_build_options_defaults(). */
 typedef struct bsp_build_options {
     bsp_accel_kind kind;
@@ -63,6 +87,10 @@ typedef struct bsp_build_options {
     bsp_sah_costs sah_costs; /* sah: cost model; 0 fields take the defaults */
     double sah_empty_bonus;  /* sah: a split with one empty side costs (1 - bonus) times
                                 its cost; 0: the default (0.1), negative: no bonus */
+    bsp_view view;           /* sah-per, sah-par, sah-mixed: the camera (default: the scene's) */
+    double mixed_primary_share; /* sah-mixed: primary rays / all rays of the render, in
+                                   (0, 1]; 0: measured by a 65 x 65 pre-pass of the Whitted
+                                   renderer (depth 4) from the view */
 } bsp_build_options;
 
 void bsp_build_options_defaults(bsp_build_options *opts);
@@ -109,6 +137,25 @@ void bsp_accel_tree_stats(const bsp_accel *accel, bsp_tree_stats *stats);
  * that cell listed in that leaf). BSP_OK, or BSP_ERR_INVALID with the first
  * violation in ERR. */
 bsp_status bsp_accel_check(const bsp_accel *accel, bsp_error *err);
+
+/* One cell of a kd-tree, as bsp_accel_visit_cells reports it. */
+typedef struct bsp_cell_info {
+    bsp_box box;     /* the cell */
+    int depth;       /* the root is 0 */
+    int is_leaf;     /* 0 also for an interior node at the visit's depth limit */
+    unsigned axis;   /* interior: the splitting plane's axis (0 x, 1 y, 2 z) */
+    double split;    /* interior: the plane's coordinate */
+    uint64_t refs;   /* primitive references in the leaves of this subtree */
+} bsp_cell_info;
+
+/* Calls VISIT for every node of a kd-tree in depth-first order (a node
+ * before its children, left before right), not descending below depth
+ * MAX_DEPTH (negative: the whole tree). VISIT returns 0 to skip the node's
+ * children. Nothing is visited for the naive method. Returns BSP_ERR_NOMEM
+ * when out of memory, else BSP_OK. */
+bsp_status bsp_accel_visit_cells(const bsp_accel *accel, int max_depth,
+                                 int (*visit)(const bsp_cell_info *cell, void *ctx), void *ctx,
+                                 bsp_error *err);
 
 /* Per-query counters, accumulated over every call made with one bsp_query. */
 typedef struct bsp_query_counters {

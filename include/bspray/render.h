@@ -87,6 +87,16 @@ typedef struct bsp_render_options {
                           below this; 0 = primary and shadow rays only; default 4 */
     int threads;       /* 0: all cores */
     bsp_sampling sampling;
+    /* The camera; NULL: the scene's (its resolution then gives the default size). */
+    const bsp_camera *camera;
+    /* 1: an orthographic camera (the rays of sah-par): parallel rays along
+     * at - from that start on the plane through from, over a window
+     * ortho_width wide (scene units) centred on from, spaced like the
+     * perspective rays (the sampling rule above, with the window in place of
+     * the angle). ortho_width 0: 2 tan(angle/2) |at - from|, the width of the
+     * perspective view at the look-at point. */
+    int orthographic;
+    double ortho_width;
     /* Called now and then from one thread with the share of rows done; may be NULL. */
     void (*progress)(double done, void *ctx);
     void *progress_ctx;
@@ -104,5 +114,12 @@ void bsp_render_options_defaults(bsp_render_options *opts);
  * the thread count. */
 bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts, bsp_image **out,
                       bsp_render_stats *stats, bsp_error *err);
+
+/* The share of primary rays among all the rays (primary, shadow, reflected,
+ * refracted) of a Whitted render of SCENE through CAMERA (NULL: the scene's;
+ * its resolution + 1 rays across, SPD protocol) with ray depth MAX_DEPTH
+ * (0: 4), on a Kaplan tree: the pre-pass of sah-mixed. */
+bsp_status bsp_measure_primary_share(const bsp_scene *scene, const bsp_camera *camera,
+                                     int max_depth, double *share, bsp_error *err);
 
 #endif /* BSPRAY_RENDER_H */

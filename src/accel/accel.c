@@ -9,7 +9,8 @@
 #include "accel/kd_cost.h"
 #include "accel/kd_tree.h"
 
-static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {"naive", "kaplan", "sah"};
+static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {"naive",   "kaplan",  "sah",
+                                                                 "sah-per", "sah-par", "sah-mixed"};
 
 double accel_now(void)
 {
@@ -70,6 +71,9 @@ bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts
         break;
     case BSP_ACCEL_KAPLAN:
     case BSP_ACCEL_SAH:
+    case BSP_ACCEL_SAH_PER:
+    case BSP_ACCEL_SAH_PAR:
+    case BSP_ACCEL_SAH_MIXED:
         st = kd_accel_build(a, err);
         break;
     default:
@@ -123,6 +127,15 @@ bsp_status bsp_accel_check(const bsp_accel *a, bsp_error *err)
     if (a->opts.kind == BSP_ACCEL_NAIVE)
         return BSP_OK;
     return kd_tree_check(a->impl, a->scene, err);
+}
+
+bsp_status bsp_accel_visit_cells(const bsp_accel *a, int max_depth,
+                                 int (*visit)(const bsp_cell_info *cell, void *ctx), void *ctx,
+                                 bsp_error *err)
+{
+    if (a->opts.kind == BSP_ACCEL_NAIVE)
+        return BSP_OK;
+    return kd_tree_visit(a->impl, max_depth, visit, ctx, err);
 }
 
 bsp_query *bsp_query_create(const bsp_accel *a)

@@ -291,9 +291,11 @@ static int grow_nev(sah_build *b, size_t need)
     return 1;
 }
 
-static double measure(const sah_build *b, const bsp_box *box)
+/* The probability measure of BOX; SURFACE: the surface area whatever the
+ * build's measure (a view measure's fallback, see build_node). */
+static double measure(const sah_build *b, const bsp_box *box, int surface)
 {
-    return b->surface ? kd_surface_area(box) : b->area(box, b->actx);
+    return surface ? kd_surface_area(box) : b->area(box, b->actx);
 }
 
 /* --- the sweep ---------------------------------------------------------------------------- */
@@ -384,7 +386,7 @@ sweep_axis(const sah_build *b, const uint64_t *e, size_t m, unsigned k, const bs
 
 #define SWEEP_CASE(MODE)                                                                        \
     case MODE:                                                                                  \
-        if (b->surface)                                                                         \
+        if (surface)                                                                            \
             sweep_axis(b, e, m, k, cell, inv_area, tsum, n, MODE, 1, best);                     \
         else                                                                                    \
             sweep_axis(b, e, m, k, cell, inv_area, tsum, n, MODE, 0, best);                     \
@@ -392,7 +394,8 @@ sweep_axis(const sah_build *b, const uint64_t *e, size_t m, unsigned k, const bs
 
 /* The sweep of axis K, specialised by cost mode and measure. */
 static void sweep(const sah_build *b, const uint64_t *e, size_t m, unsigned k,
-                  const bsp_box *cell, double inv_area, double tsum, size_t n, split_choice *best)
+                  const bsp_box *cell, double inv_area, double tsum, size_t n, int surface,
+                  split_choice *best)
 {
     switch (b->cost_mode) {
         SWEEP_CASE(COST_UNIFORM)
@@ -474,24 +477,35 @@ static void merge_back(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn)
 }
 
 /* Builds the subtree of NODE over CELL from the lists L; ev[top, ...) is
- * free. *COST_OUT: the subtree's cost under the model (for retraction). */
+ * free. *COST_OUT: the subtree's cost under the model (for retraction).
+ * SURFACE: measure by the surface area. A view measure (sah-per, sah-par)
+ * is 0 for a cell no ray of its view reaches — outside the viewport or
+ * behind the eye — and the ratio child/node is then undefined; such a cell
+ * and its subtree are built by the plain surface area instead, so that the
+ * secondary and shadow rays that do reach it find a good tree. */
 static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lists L, size_t top,
-                             int depth, int bad, double *cost_out)
+                             int depth, int bad, int surface, double *cost_out)
 {
     kd_tree *t = b->t;
     const size_t n = L.n, m = 2 * n;
     const double tsum = L.tsum;
     *cost_out = tsum;
-    double area = measure(b, &cell);
-    if (n <= (size_t)t->max_leaf_prims || depth >= t->max_depth || !(area > 0.0))
+    if (n <= (size_t)t->max_leaf_prims || depth >= t->max_depth)
+        return make_leaf(b, node, b->ev + L.base, n);
+    double area = measure(b, &cell, surface);
+    if (!surface && !(area > 0.0)) {
+        surface = 1;
+        area = kd_surface_area(&cell);
+    }
+    if (!(area > 0.0))
         return make_leaf(b, node, b->ev + L.base, n);
 
     /* 1. the best plane: one sweep per axis */
     split_choice best = {INFINITY, 0, 0.0f, 0};
-    double inv_area = (b->surface ? 2.0 : 1.0) / area; /* the sweep uses half areas */
+    double inv_area = (surface ? 2.0 : 1.0) / area; /* the sweep uses half areas */
     for (unsigned k = 0; k < 3; k++) {
         const uint64_t *e = b->ev + L.base + k * L.stride;
-        sweep(b, e, m, k, &cell, inv_area, tsum, n, &best);
+        sweep(b, e, m, k, &cell, inv_area, tsum, n, surface, &best);
     }
     if (!best.found)
         return make_leaf(b, node, b->ev + L.base, n);
@@ -621,12 +635,14 @@ static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     kd_make_interior(t, node, axis, best.pos, child);
     size_t saved_prims = t->nprims;
     double cl, cr;
-    bsp_status st = build_node(b, child, lcell, LL, free_top, depth + 1, bad + bad_here, &cl);
+    bsp_status st =
+        build_node(b, child, lcell, LL, free_top, depth + 1, bad + bad_here, surface, &cl);
     if (st == BSP_OK)
-        st = build_node(b, child + 1, rcell, RL, free_top, depth + 1, bad + bad_here, &cr);
+        st = build_node(b, child + 1, rcell, RL, free_top, depth + 1, bad + bad_here, surface, &cr);
     if (st != BSP_OK)
         return st;
-    double cost = b->ctrav + (measure(b, &lcell) * cl + measure(b, &rcell) * cr) / area;
+    double cost =
+        b->ctrav + (measure(b, &lcell, surface) * cl + measure(b, &rcell, surface) * cr) / area;
     if (!bad_here || cost < tsum) {
         *cost_out = cost;
         return BSP_OK;
@@ -764,7 +780,7 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
         if (scene->prims[p].shape != SHAPE_NONE)
             tsum += b.cost ? (double)b.cost[p] : b.unif;
     node_lists root = {0, m, n, tsum};
-    st = build_node(&b, 0, t->box, root, 3 * m, 0, 0, &cost);
+    st = build_node(&b, 0, t->box, root, 3 * m, 0, 0, b.surface, &cost);
 done:
     free(b.cls);
     free(b.ev);

@@ -8,6 +8,7 @@
 
 #include "accel/kd_clip.h"
 #include "accel/kd_tree.h"
+#include "accel/kd_view.h"
 #include "geom/vec.h"
 
 int kd_tree_init(kd_tree *t, const bsp_scene *scene, int max_depth, int max_leaf_prims)
@@ -294,6 +295,53 @@ bsp_status kd_tree_check(const kd_tree *t, const bsp_scene *scene, bsp_error *er
     return w.st;
 }
 
+/* --- cell walk (bsp_accel_visit_cells) ------------------------------------------------ */
+
+typedef struct visit_walk {
+    const kd_tree *t;
+    const uint64_t *refs; /* per node: references in its subtree's leaves */
+    int max_depth;
+    int (*visit)(const bsp_cell_info *cell, void *ctx);
+    void *ctx;
+} visit_walk;
+
+static void visit_node(const visit_walk *w, uint32_t i, bsp_box box, int depth)
+{
+    const kd_node *n = &w->t->nodes[i];
+    bsp_cell_info c;
+    c.box = box;
+    c.depth = depth;
+    c.is_leaf = kd_is_leaf(n);
+    c.axis = c.is_leaf ? 0 : kd_axis(n);
+    c.split = c.is_leaf ? 0.0 : (double)n->u.split;
+    c.refs = w->refs[i];
+    int descend = w->visit(&c, w->ctx);
+    if (c.is_leaf || !descend || (w->max_depth >= 0 && depth >= w->max_depth))
+        return;
+    bsp_box l = box, r = box;
+    l.hi.v[c.axis] = r.lo.v[c.axis] = c.split;
+    visit_node(w, kd_child(n), l, depth + 1);
+    visit_node(w, kd_child(n) + 1, r, depth + 1);
+}
+
+bsp_status kd_tree_visit(const kd_tree *t, int max_depth,
+                         int (*visit)(const bsp_cell_info *cell, void *ctx), void *ctx,
+                         bsp_error *err)
+{
+    uint64_t *refs = malloc((size_t)t->nnodes * sizeof *refs);
+    if (!refs)
+        return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    /* children always follow their parent in the array: one backward pass */
+    for (uint32_t i = t->nnodes; i-- > 0;) {
+        const kd_node *n = &t->nodes[i];
+        refs[i] = kd_is_leaf(n) ? kd_count(n) : refs[kd_child(n)] + refs[kd_child(n) + 1];
+    }
+    visit_walk w = {t, refs, max_depth, visit, ctx};
+    visit_node(&w, 0, t->box, 0);
+    free(refs);
+    return BSP_OK;
+}
+
 /* --- accel front end ------------------------------------------------------------------ */
 
 static void kd_destroy(void *impl)
@@ -307,7 +355,9 @@ static const accel_ops kd_ops = {kd_intersect, kd_occluded, kd_destroy};
 bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
 {
     bsp_build_options *o = &a->opts;
-    if (o->kind == BSP_ACCEL_SAH)
+    int sah_family = o->kind == BSP_ACCEL_SAH || o->kind == BSP_ACCEL_SAH_PER ||
+                     o->kind == BSP_ACCEL_SAH_PAR || o->kind == BSP_ACCEL_SAH_MIXED;
+    if (sah_family)
         kd_sah_default_limits(o, a->scene);
     if (o->max_depth == 0)
         o->max_depth = 18;
@@ -333,6 +383,11 @@ bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
         break;
     case BSP_ACCEL_SAH:
         st = kd_build_sah(t, a->scene, o, err);
+        break;
+    case BSP_ACCEL_SAH_PER:
+    case BSP_ACCEL_SAH_PAR:
+    case BSP_ACCEL_SAH_MIXED:
+        st = kd_build_view(t, a->scene, o, err);
         break;
     default:
         st = error_set(err, BSP_ERR_INVALID, NULL, 0, "not a kd-tree rule");

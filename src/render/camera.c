@@ -12,6 +12,11 @@
  * step inside the edge.
  *
  * Pixels are square; the angle applies to the horizontal direction.
+ *
+ * Orthographic (the rays of sah-par): the same grid, with a window of the
+ * given width in scene units in place of the angle, on the plane through
+ * `from` perpendicular to the view; every ray starts on that plane and runs
+ * along the view direction.
  */
 #include <math.h>
 
@@ -25,8 +30,13 @@ void camera_default_size(const bsp_camera *cam, bsp_sampling sampling, int *widt
     *height = cam->res_y + extra;
 }
 
+double camera_default_ortho_width(const bsp_camera *cam)
+{
+    return 2.0 * tan(cam->angle_deg * (BSP_PI / 360.0)) * v3_length(v3_sub(cam->at, cam->from));
+}
+
 void camera_rays_init(camera_rays *cr, const bsp_camera *cam, int width, int height,
-                      bsp_sampling sampling)
+                      bsp_sampling sampling, double ortho_width)
 {
     cr->eye = cam->from;
     cr->forward = v3_normalize(v3_sub(cam->at, cam->from));
@@ -34,7 +44,8 @@ void camera_rays_init(camera_rays *cr, const bsp_camera *cam, int width, int hei
     cr->up = v3_cross(cr->right, cr->forward);
     cr->width = width;
     cr->height = height;
-    double half = tan(cam->angle_deg * (BSP_PI / 360.0));
+    cr->ortho = ortho_width > 0.0;
+    double half = cr->ortho ? 0.5 * ortho_width : tan(cam->angle_deg * (BSP_PI / 360.0));
     if (sampling == BSP_SAMPLING_SPD) /* a one-ray-wide image looks straight ahead */
         cr->step = width > 1 ? 2.0 * half / (double)(width - 1) : 0.0;
     else
@@ -48,6 +59,14 @@ bsp_ray camera_ray(const camera_rays *cr, int x, int y)
 {
     double sx = cr->x0 + (double)x * cr->step;
     double sy = cr->y0 - (double)y * cr->step;
+    if (cr->ortho) {
+        bsp_ray r;
+        r.org = v3_add(cr->eye, v3_add(v3_scale(cr->right, sx), v3_scale(cr->up, sy)));
+        r.dir = cr->forward;
+        r.tmin = 0.0;
+        r.tmax = INFINITY;
+        return r;
+    }
     bsp_vec3 d = v3_add(cr->forward, v3_add(v3_scale(cr->right, sx), v3_scale(cr->up, sy)));
     bsp_ray r;
     r.org = cr->eye;

@@ -259,10 +259,17 @@ bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts_in,
     else
         bsp_render_options_defaults(&opts);
     const bsp_scene *s = bsp_accel_scene(accel);
-    const bsp_camera *cam = bsp_scene_camera(s);
+    const bsp_camera *cam = opts.camera ? opts.camera : bsp_scene_camera(s);
     if (!cam)
         return error_set(err, BSP_ERR_INVALID, NULL, 0,
                          "the scene has no camera (no 'v' block)");
+    double ortho_width = 0.0;
+    if (opts.orthographic) {
+        ortho_width = opts.ortho_width > 0.0 ? opts.ortho_width : camera_default_ortho_width(cam);
+        if (!(ortho_width > 0.0 && isfinite(ortho_width)))
+            return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                             "the orthographic window width must be positive and finite");
+    }
     if (opts.max_depth < 0 || opts.max_depth > 64)
         return error_set(err, BSP_ERR_INVALID, NULL, 0, "ray depth %d is outside 0..64",
                          opts.max_depth);
@@ -288,7 +295,7 @@ bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts_in,
     if (!job.img)
         return error_set(err, BSP_ERR_LIMIT, NULL, 0,
                          "cannot allocate a %d x %d image", width, height);
-    camera_rays_init(&job.cam, cam, width, height, opts.sampling);
+    camera_rays_init(&job.cam, cam, width, height, opts.sampling, ortho_width);
     job.eps = RAY_EPS_REL * scene_scale(s);
     size_t nl = bsp_scene_light_count(s);
     job.light_intensity = nl ? 1.0 / (2.0 * sqrt((double)nl)) : 0.5;
@@ -340,5 +347,34 @@ bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts_in,
         return st;
     }
     *out = job.img;
+    return BSP_OK;
+}
+
+bsp_status bsp_measure_primary_share(const bsp_scene *scene, const bsp_camera *camera,
+                                     int max_depth, double *share, bsp_error *err)
+{
+    bsp_build_options bo;
+    bsp_build_options_defaults(&bo);
+    bo.kind = BSP_ACCEL_KAPLAN; /* ray counts do not depend on the structure */
+    bsp_accel *a = NULL;
+    bsp_status st = bsp_accel_build(scene, &bo, &a, err);
+    if (st != BSP_OK)
+        return st;
+    bsp_render_options ro;
+    bsp_render_options_defaults(&ro);
+    ro.camera = camera;
+    if (max_depth > 0)
+        ro.max_depth = max_depth;
+    bsp_image *img = NULL;
+    bsp_render_stats rs;
+    st = bsp_render(a, &ro, &img, &rs, err);
+    bsp_image_destroy(img);
+    bsp_accel_destroy(a);
+    if (st != BSP_OK)
+        return st;
+    uint64_t all = 0;
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++)
+        all += rs.cls[c].rays;
+    *share = all ? (double)rs.cls[BSP_RAY_PRIMARY].rays / (double)all : 1.0;
     return BSP_OK;
 }

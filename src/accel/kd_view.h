@@ -1,0 +1,49 @@
+/*
+ * kd_view.h — the paper's modified SAH (Havran, Bittner & Kopal, section 4):
+ * probability measures for restricted ray sets, and the builds that use them.
+ *
+ * For rays from one eye through a viewport (PER) the share of the rays that
+ * cross a box B is the area of B's projection onto the image plane, clipped
+ * to the viewport, over the viewport's area: rays are spread uniformly over
+ * the image plane. For rays of one direction starting on a plane (PAR) it
+ * is the area of B's parallel projection onto that plane, clipped to the
+ * window. Either way only the part of B in front of the rays' origin (the
+ * eye plane, or the plane the parallel rays start from) counts; a box that
+ * contains the eye is crossed by every ray.
+ *
+ * The builds are the SAH builder with this measure in place of the surface
+ * area (kd_build_sah_measure): the events, the termination and the node
+ * layout are shared.
+ */
+#ifndef BSPRAY_ACCEL_KD_VIEW_H
+#define BSPRAY_ACCEL_KD_VIEW_H
+
+#include "accel/kd_tree.h"
+
+/* A resolved view: an orthonormal frame and the viewport. */
+typedef struct kd_view {
+    int ortho;               /* 0: perspective (PER), 1: parallel (PAR) */
+    bsp_vec3 eye;            /* PER: the eye; PAR: the window's centre */
+    bsp_vec3 fwd, right, up; /* orthonormal; fwd is the view direction */
+    /* The viewport, in the image plane at distance 1 from the eye (PER) or in
+     * the plane through EYE (PAR, scene units): [-hx, hx] x [-hy, hy]. */
+    double hx, hy;
+} kd_view;
+
+/* Resolves the view of O (its explicit view, or SCENE's camera) for ORTHO.
+ * BSP_ERR_INVALID with a message when there is no camera or it is
+ * degenerate. */
+HIDDEN bsp_status kd_view_resolve(const bsp_scene *scene, const bsp_build_options *o, int ortho,
+                                  kd_view *v, bsp_error *err);
+
+/* The area of BOX's projection clipped to the viewport of V (in the units
+ * of hx * hy; the viewport's own area is 4 hx hy). 0 for a box wholly
+ * behind the eye plane or outside the viewport; 4 hx hy for a box that
+ * contains the eye (PER). CTX of kd_area_fn is a kd_view. */
+HIDDEN double kd_view_area(const bsp_box *box, const void *view);
+
+/* The sah-per, sah-par and sah-mixed builds of O->kind. */
+HIDDEN bsp_status kd_build_view(kd_tree *t, const bsp_scene *scene, const bsp_build_options *o,
+                                bsp_error *err);
+
+#endif /* BSPRAY_ACCEL_KD_VIEW_H */
