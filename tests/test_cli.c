@@ -84,6 +84,78 @@ TEST(cli_bench_table_and_csv)
     free(out);
 }
 
+/* The ScnCoverage and PrimaryRay of a render's --stats-json file. */
+static int json_coverage(const char *path, double *cov, long *primary)
+{
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return 0;
+    char buf[8192];
+    size_t n = fread(buf, 1, sizeof buf - 1, f);
+    fclose(f);
+    buf[n] = 0;
+    const char *c = strstr(buf, "\"ScnCoverage\": "), *p = strstr(buf, "\"PrimaryRay\": ");
+    return c && p && sscanf(c + 15, "%lf", cov) == 1 && sscanf(p + 14, "%ld", primary) == 1;
+}
+
+/* bench --paper: #rays of the primary block is 513 x 513, and ScnCov is what
+ * the plain renderer reports for the same camera (perspective and ortho). */
+TEST(cli_bench_paper_counts)
+{
+    char csv[512], json[2][512], cmd[4096];
+    snprintf(csv, sizeof csv, "%s/paper.csv", harness_tmpdir());
+    snprintf(json[0], sizeof json[0], "%s/paper_persp.json", harness_tmpdir());
+    snprintf(json[1], sizeof json[1], "%s/paper_ortho.json", harness_tmpdir());
+    snprintf(cmd, sizeof cmd,
+             "%s bench --paper spd:rings:1 --accel sah,sah-per,sah-par --validate 200 --quiet "
+             "--csv %s",
+             harness_cli(), csv);
+    int st;
+    char *out = run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    CHECK_STR_CONTAINS(out, "| **# intersection tests per ray** |");
+    CHECK_STR_CONTAINS(out, "| sah-par, ortho |");
+    CHECK_STR_CONTAINS(out, "N_IT primary: sah-per vs sah");
+    free(out);
+    for (int ortho = 0; ortho < 2; ortho++) {
+        snprintf(cmd, sizeof cmd,
+                 "%s render spd:rings:1 --res 513 --quiet %s --stats-json %s -o %s/paper.png",
+                 harness_cli(), ortho ? "--ortho auto" : "", json[ortho], harness_tmpdir());
+        out = run(cmd, &st);
+        CHECK_EQ_INT(st, 0);
+        free(out);
+    }
+    double cov[2] = {-1, -1};
+    long prim[2] = {0, 0};
+    REQUIRE(json_coverage(json[0], &cov[0], &prim[0]));
+    REQUIRE(json_coverage(json[1], &cov[1], &prim[1]));
+    CHECK_EQ_INT(prim[0], 513 * 513);
+    FILE *f = fopen(csv, "r");
+    REQUIRE(f);
+    char line[1024];
+    REQUIRE(fgets(line, sizeof line, f));
+    CHECK(strncmp(line, "scene,accel,camera,rays,ScnCov,nrays,N_V,N_IT,N_TS,T_B,T_TR", 59) == 0);
+    int rows = 0;
+    while (fgets(line, sizeof line, f)) {
+        char scene[64], accel[32], camera[32], rays[16];
+        double c;
+        long nrays;
+        REQUIRE(sscanf(line, "%63[^,],%31[^,],%31[^,],%15[^,],%lf,%ld", scene, accel, camera,
+                       rays, &c, &nrays) == 6);
+        int ortho = strcmp(camera, "ortho") == 0;
+        CHECK_EQ_INT(ortho, strcmp(accel, "sah-par") == 0);
+        CHECK_NEAR(c, cov[ortho], 1e-4);
+        if (strcmp(rays, "primary") == 0)
+            CHECK_EQ_INT(nrays, 513 * 513);
+        else
+            CHECK(nrays > 513 * 513);
+        rows++;
+    }
+    fclose(f);
+    CHECK_EQ_INT(rows, 6); /* 3 rules x primary, all */
+}
+
 TEST(cli_stats_of_a_tree)
 {
     char cmd[1024];

@@ -26,11 +26,13 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "bench.h"
 #include "cli.h"
 
 static const char bench_usage[] =
     "bspray bench [SCENE...] [--accel LIST] [--res N] [--depth N] [--threads N]\n"
-    "                        [--mailbox on|off] [--validate N] [--csv FILE] [--quiet]";
+    "                        [--mailbox on|off] [--validate N] [--csv FILE] [--quiet]\n"
+    "       bspray bench --paper [SCENE...] [--accel LIST] [--csv FILE] ...  (see --paper --help)";
 
 /* The default scene list: every SPD database at its default size, teapot at
  * the size of the SPD Readme and Havran's tables. */
@@ -54,7 +56,7 @@ static void print_help(void)
            "\n"
            "  SCENE...          scenes (files or spd:NAME[:SIZE]); default: every SPD scene\n"
            "  --accel LIST      comma-separated methods (default: naive where the scene has\n"
-           "                    at most %d primitives, and every kd-tree rule)\n"
+           "                    at most %d primitives, kaplan and sah)\n"
            "  --res N           N x N rays, SPD corner sampling (default 513: Havran's protocol)\n"
            "  --depth N         ray depth (default 4)\n"
            "  --threads N       the 'all threads' figures use N threads (default: all cores)\n"
@@ -175,8 +177,8 @@ static int same_answer(const bsp_accel *a, bsp_query *qa, const bsp_accel *n, bs
 /* Compares ACCEL with NAIVE on NRAND random rays and on a grid of primary
  * rays; returns the number of rays checked, or -1 on the first difference
  * (described in *WHAT). */
-static long validate(const bsp_accel *accel, const bsp_accel *naive, const bsp_scene *scene,
-                     int nrand, char *what, size_t what_size)
+long bench_validate(const bsp_accel *accel, const bsp_accel *naive, const bsp_scene *scene,
+                    int nrand, char *what, size_t what_size)
 {
     bsp_query *qa = bsp_query_create(accel), *qn = bsp_query_create(naive);
     if (!qa || !qn) {
@@ -338,7 +340,7 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
 
     if (kind != BSP_ACCEL_NAIVE) {
         char what[256];
-        row.validated = validate(accel, naive, scene, o->nvalidate, what, sizeof what);
+        row.validated = bench_validate(accel, naive, scene, o->nvalidate, what, sizeof what);
         if (row.validated < 0) {
             fprintf(stderr, "%s: %s: %s differs from the naive method on %s; aborting\n", prog,
                     scene_name, row.method, what);
@@ -428,6 +430,9 @@ static void parse_accel_list(args *a, bench_opts *o)
 
 int cmd_bench(int argc, char **argv)
 {
+    for (int i = 1; i < argc; i++)
+        if (!strcmp(argv[i], "--paper"))
+            return bench_paper(argc, argv);
     args a = {argc, 1, argv, bench_usage};
     bench_opts o;
     memset(&o, 0, sizeof o);
@@ -437,7 +442,8 @@ int cmd_bench(int argc, char **argv)
     o.nvalidate = 20000;
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
     o.threads = ncpu > 0 ? (int)ncpu : 1;
-    for (int k = 0; k < BSP_ACCEL_KIND_COUNT; k++)
+    /* the default methods: naive, kaplan, sah (the view rules: --accel, or --paper) */
+    for (int k = BSP_ACCEL_NAIVE; k <= BSP_ACCEL_SAH; k++)
         o.kinds[o.nkinds++] = (bsp_accel_kind)k;
     const char *csv_path = NULL;
     size_t ndefault = sizeof default_scenes / sizeof default_scenes[0];

@@ -216,12 +216,33 @@ void apply_view_args(bsp_scene *scene, const char *path, const view_args *v,
                      bsp_build_options *bopts, bsp_render_options *ro)
 {
     bsp_error err;
-    if (v->given) {
+    const bsp_camera *c = bsp_scene_camera(scene);
+    if (v->given && c && !bsp_scene_camera_is_default(scene)) {
+        /* a scene with its own camera keeps whatever is not overridden */
+        bsp_camera cam = *c;
+        if (v->has_eye)
+            cam.from = v->eye;
+        if (v->has_at)
+            cam.at = v->at;
+        else if (v->has_dir)
+            cam.at = (bsp_vec3){{cam.from.x + v->dir.x, cam.from.y + v->dir.y,
+                                 cam.from.z + v->dir.z}};
+        else if (v->has_eye) /* keep the view direction */
+            cam.at = (bsp_vec3){{cam.from.x + c->at.x - c->from.x, cam.from.y + c->at.y - c->from.y,
+                                 cam.from.z + c->at.z - c->from.z}};
+        if (v->has_up)
+            cam.up = v->up;
+        if (v->fov > 0.0)
+            cam.angle_deg = v->fov;
+        if (bsp_scene_set_camera(scene, &cam, &err) != BSP_OK)
+            goto fail;
+    } else if (v->given) {
+        /* a mesh: the default view, adapted to what is given */
         if (bsp_scene_set_default_view(scene, v->has_eye ? &v->eye : NULL,
                                        v->has_at ? &v->at : NULL, v->has_up ? &v->up : NULL,
                                        v->fov, &err) != BSP_OK)
             goto fail;
-        const bsp_camera *c = bsp_scene_camera(scene);
+        c = bsp_scene_camera(scene);
         if (v->has_dir && c) {
             bsp_vec3 eye = c->from;
             bsp_vec3 at = {{eye.x + v->dir.x, eye.y + v->dir.y, eye.z + v->dir.z}};

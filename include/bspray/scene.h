@@ -128,6 +128,9 @@ size_t bsp_scene_kind_count(const bsp_scene *scene, bsp_prim_kind kind);
 
 /* NULL when the scene has no camera. */
 const bsp_camera *bsp_scene_camera(const bsp_scene *scene);
+/* 1 when the camera is a default view framed by bsp_scene_set_default_view
+ * (a mesh's), 0 for one set from a file or by bsp_scene_set_camera. */
+int bsp_scene_camera_is_default(const bsp_scene *scene);
 size_t bsp_scene_light_count(const bsp_scene *scene);
 const bsp_light *bsp_scene_light(const bsp_scene *scene, size_t i);
 size_t bsp_scene_material_count(const bsp_scene *scene);

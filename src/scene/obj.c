@@ -408,10 +408,11 @@ bsp_status bsp_scene_set_default_view(bsp_scene *s, const bsp_vec3 *eye, const b
     cam.res_y = s->has_camera ? s->camera.res_y : MESH_DEFAULT_RES;
 
     bsp_camera old = s->camera;
-    int had_camera = s->has_camera;
+    int had_camera = s->has_camera, had_default = s->camera_is_default;
     bsp_status st = bsp_scene_set_camera(s, &cam, err);
     if (st != BSP_OK)
         return st;
+    s->camera_is_default = 1;
 
     /* the light at the eye: added to a scene without lights, moved when it
      * sat at the previous eye (as this function put it) */
@@ -424,6 +425,7 @@ bsp_status bsp_scene_set_default_view(bsp_scene *s, const bsp_vec3 *eye, const b
         if (st != BSP_OK) {
             s->camera = old;
             s->has_camera = had_camera;
+            s->camera_is_default = had_default;
         }
         return st;
     }

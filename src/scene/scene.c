@@ -340,6 +340,7 @@ bsp_status bsp_scene_set_camera(bsp_scene *s, const bsp_camera *c, bsp_error *er
                           c->res_x, c->res_y, CAMERA_MAX_RES);
     s->camera = *c;
     s->has_camera = 1;
+    s->camera_is_default = 0;
     return BSP_OK;
 }
 
@@ -425,6 +426,11 @@ size_t bsp_scene_kind_count(const bsp_scene *s, bsp_prim_kind kind)
 const bsp_camera *bsp_scene_camera(const bsp_scene *s)
 {
     return s->has_camera ? &s->camera : NULL;
+}
+
+int bsp_scene_camera_is_default(const bsp_scene *s)
+{
+    return s->has_camera && s->camera_is_default;
 }
 
 size_t bsp_scene_light_count(const bsp_scene *s)

@@ -82,6 +82,7 @@ struct bsp_scene {
 
     bsp_camera camera;
     int has_camera;
+    int camera_is_default; /* framed by bsp_scene_set_default_view */
     double background[3];
 
     bsp_box bounds; /* of the live primitives */

@@ -1,0 +1,513 @@
+/*
+ * paper.c — `bspray bench --paper`: Table 1 of Havran, Bittner & Kopal
+ * ("BSPT for perspective projection") by one command.
+ *
+ * The paper's protocol: 513 x 513 rays, ray depth 4, trees of maximum depth
+ * 18 with at most 2 primitives per leaf, mailboxes on. For every scene and
+ * rule: build, validate against the naive method (as plain bench does), then
+ * render once and count. The paper counts primary rays; a second block has
+ * the same figures over all the render's rays, a third the times. sah-par
+ * trees are built for, and rendered with, the orthographic camera of the
+ * same view (its own rays); an `sah` tree rendered with those rays is the
+ * reference next to it. The paper's own numbers sit in rows of their own.
+ */
+#include <errno.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bench.h"
+#include "cli.h"
+
+static const char paper_usage[] =
+    "bspray bench --paper [SCENE...] [--accel LIST] [--res N] [--depth N] [--threads N]\n"
+    "                     [--validate N] [--csv FILE] [--quiet]";
+
+/* The default scenes: the paper's three SPD scenes first (its fourth,
+ * "fluid", is not an SPD database), then every other SPD scene. */
+static const char *const paper_scenes[] = {
+    "spd:lattice", "spd:rings", "spd:tree",   "spd:balls",  "spd:gears",
+    "spd:mount",   "spd:teapot:12", "spd:tetra", "spd:shells", "spd:jacks",
+    "spd:sombrero", "spd:sample", "spd:nurbtst"};
+
+typedef struct paper_rule {
+    const char *label;
+    bsp_accel_kind kind;
+    int ortho; /* rendered with (and for sah-par, built for) the orthographic camera */
+} paper_rule;
+
+#define MAX_RULES 16
+
+static const paper_rule default_rules[] = {
+    {"kaplan", BSP_ACCEL_KAPLAN, 0},    {"sah", BSP_ACCEL_SAH, 0},
+    {"sah-per", BSP_ACCEL_SAH_PER, 0},  {"sah-mixed", BSP_ACCEL_SAH_MIXED, 0},
+    {"sah, ortho", BSP_ACCEL_SAH, 1},   {"sah-par, ortho", BSP_ACCEL_SAH_PAR, 1}};
+
+/* Table 1 of the paper (scenes fluid, lattice, rings, tree; fluid is not
+ * one of ours). */
+typedef struct paper_figures {
+    const char *scene;
+    double cov, leaves_sah, leaves_per, nit_sah, nit_per, nts_sah, nts_per;
+} paper_figures;
+
+static const paper_figures paper_table[] = {
+    {"spd:lattice", 99.24, 15722, 13247, 11.9, 9.13, 44.9, 29.7},
+    {"spd:rings", 100.0, 11845, 16322, 11.1, 9.15, 40.9, 38.1},
+    {"spd:tree", 64.6, 2750, 3992, 10.1, 6.39, 23.1, 19.0}};
+
+static const paper_figures *paper_of(const char *scene)
+{
+    for (size_t i = 0; i < sizeof paper_table / sizeof paper_table[0]; i++)
+        if (!strcmp(paper_table[i].scene, scene))
+            return &paper_table[i];
+    return NULL;
+}
+
+/* The figures of one scene x rule. */
+typedef struct cell {
+    int done;
+    double t_build, t_render;
+    bsp_tree_stats tree;
+    uint64_t rays_primary, hits_primary, rays_all;
+    double nit_primary, nts_primary, nit_all, nts_all;
+} cell;
+
+typedef struct paper_opts {
+    int res, depth, threads, nvalidate, quiet;
+    paper_rule rules[MAX_RULES];
+    int nrules;
+} paper_opts;
+
+static void print_help(void)
+{
+    printf("usage: %s\n\n"
+           "Table 1 of Havran, Bittner & Kopal, \"Adaptive data structures for visibility\n"
+           "computing\": for every scene and rule, a 513 x 513 render with ray depth 4 on a\n"
+           "tree of maximum depth 18 and at most 2 primitives per leaf (mailboxes on), after\n"
+           "validating the tree against the naive method. Printed as Markdown: the paper's\n"
+           "figures for primary rays (scene coverage, rays, leaves, intersection tests and\n"
+           "traversal steps per ray), the same over all rays, then build and render times;\n"
+           "the paper's own numbers are in the rows marked (paper).\n"
+           "\n"
+           "  SCENE...        scenes (default: lattice, rings, tree, then the other SPD scenes)\n"
+           "  --accel LIST    rules (default: kaplan, sah, sah-per, sah-mixed, and with the\n"
+           "                  orthographic camera sah and sah-par); sah-par always renders\n"
+           "                  with the orthographic camera it is built for\n"
+           "  --res N         N x N rays (default 513)\n"
+           "  --depth N       ray depth (default 4)\n"
+           "  --threads N     render threads (default 1: single-thread times)\n"
+           "  --validate N    random rays compared with naive before each render (default 5000)\n"
+           "  --csv FILE      one row per scene x rule x ray set, columns scene, accel, camera,\n"
+           "                  rays (primary or all), ScnCov, nrays, N_V, N_IT, N_TS, T_B, T_TR\n"
+           "  --quiet         no progress lines\n",
+           paper_usage);
+}
+
+static void parse_rules(args *a, paper_opts *o)
+{
+    const char *v = opt_value(a, "--accel");
+    char buf[256];
+    snprintf(buf, sizeof buf, "%s", v);
+    o->nrules = 0;
+    char *save = NULL;
+    for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+        bsp_error err;
+        bsp_accel_kind k;
+        if (bsp_accel_kind_parse(tok, &k, &err) != BSP_OK)
+            die_usage(a->usage, "%s", err.message);
+        if (k == BSP_ACCEL_NAIVE)
+            die_usage(a->usage, "%s", "--paper compares trees; naive has none");
+        if (o->nrules >= MAX_RULES)
+            die_usage(a->usage, "%s", "--accel: too many rules");
+        int ortho = k == BSP_ACCEL_SAH_PAR;
+        o->rules[o->nrules++] =
+            (paper_rule){ortho ? "sah-par, ortho" : bsp_accel_kind_name(k), k, ortho};
+    }
+    if (o->nrules == 0)
+        die_usage(a->usage, "%s", "--accel needs at least one rule");
+}
+
+/* Builds, validates and renders one scene x rule into *C; 0, or 1 on failure. */
+static int run_cell(const paper_opts *o, const char *name, const bsp_scene *scene,
+                    const bsp_accel *naive, const paper_rule *r, cell *c)
+{
+    bsp_build_options bo;
+    bsp_build_options_defaults(&bo);
+    bo.kind = r->kind;
+    bo.max_depth = 18;
+    bo.max_leaf_prims = 2;
+    if (!o->quiet)
+        fprintf(stderr, "%s: %s: %s: building\n", prog, name, r->label);
+    bsp_accel *accel = build_accel(scene, &bo);
+    c->t_build = bsp_accel_build_seconds(accel);
+    bsp_accel_tree_stats(accel, &c->tree);
+    char what[256];
+    if (bench_validate(accel, naive, scene, o->nvalidate, what, sizeof what) < 0) {
+        fprintf(stderr, "%s: %s: %s differs from the naive method on %s; aborting\n", prog, name,
+                r->label, what);
+        bsp_accel_destroy(accel);
+        return 1;
+    }
+    bsp_render_options ro;
+    bsp_render_options_defaults(&ro);
+    ro.width = ro.height = o->res;
+    ro.max_depth = o->depth;
+    ro.threads = o->threads;
+    ro.orthographic = r->ortho;
+    bsp_image *img = NULL;
+    bsp_render_stats st;
+    bsp_error err;
+    if (!o->quiet)
+        fprintf(stderr, "%s: %s: %s: rendering\n", prog, name, r->label);
+    bsp_status rs = bsp_render(accel, &ro, &img, &st, &err);
+    bsp_image_destroy(img);
+    bsp_accel_destroy(accel);
+    if (rs != BSP_OK) {
+        fprintf(stderr, "%s: %s: %s\n", prog, name, err.message);
+        return 1;
+    }
+    const bsp_ray_class_stats *P = &st.cls[BSP_RAY_PRIMARY];
+    uint64_t tests = 0, steps = 0;
+    for (int k = 0; k < BSP_RAY_CLASS_COUNT; k++) {
+        c->rays_all += st.cls[k].rays;
+        tests += st.cls[k].isect_tests;
+        steps += st.cls[k].traversal_steps;
+    }
+    c->rays_primary = P->rays;
+    c->hits_primary = P->hits;
+    c->nit_primary = P->rays ? (double)P->isect_tests / (double)P->rays : 0.0;
+    c->nts_primary = P->rays ? (double)P->traversal_steps / (double)P->rays : 0.0;
+    c->nit_all = c->rays_all ? (double)tests / (double)c->rays_all : 0.0;
+    c->nts_all = c->rays_all ? (double)steps / (double)c->rays_all : 0.0;
+    c->t_render = st.render_seconds;
+    c->done = 1;
+    return 0;
+}
+
+/* --- output ------------------------------------------------------------------------- */
+
+typedef struct table {
+    const paper_opts *o;
+    const char **scenes;
+    int nscenes;
+    cell *cells; /* [scene * nrules + rule] */
+} table;
+
+static const cell *at(const table *t, int s, int r)
+{
+    return &t->cells[(size_t)s * (size_t)t->o->nrules + (size_t)r];
+}
+
+static void header(const table *t, const char *first)
+{
+    printf("| %s |", first);
+    for (int s = 0; s < t->nscenes; s++)
+        printf(" %s |", t->scenes[s]);
+    printf("\n|---|");
+    for (int s = 0; s < t->nscenes; s++)
+        printf("---:|");
+    printf("\n");
+}
+
+/* Which figure a row shows. */
+enum figure { F_COV, F_RAYS, F_LEAVES, F_NIT, F_NTS, F_TB, F_TR };
+
+static double figure_of(const cell *c, enum figure f, int all)
+{
+    switch (f) {
+    case F_COV:
+        return c->rays_primary ? 100.0 * (double)c->hits_primary / (double)c->rays_primary : 0.0;
+    case F_RAYS:
+        return (double)(all ? c->rays_all : c->rays_primary) * 1e-4;
+    case F_LEAVES:
+        return (double)c->tree.leaves;
+    case F_NIT:
+        return all ? c->nit_all : c->nit_primary;
+    case F_NTS:
+        return all ? c->nts_all : c->nts_primary;
+    case F_TB:
+        return c->t_build;
+    case F_TR:
+        return c->t_render;
+    }
+    return 0.0;
+}
+
+static void value(double v, enum figure f)
+{
+    if (f == F_LEAVES)
+        printf(" %.0f |", v);
+    else if (f == F_TB || f == F_TR)
+        printf(" %.3f |", v);
+    else
+        printf(" %.2f |", v);
+}
+
+/* One row per rule, under a bold caption row. */
+static void rule_rows(const table *t, const char *caption, enum figure f, int all)
+{
+    printf("| **%s** |", caption);
+    for (int s = 0; s < t->nscenes; s++)
+        printf(" |");
+    printf("\n");
+    for (int r = 0; r < t->o->nrules; r++) {
+        printf("| %s |", t->o->rules[r].label);
+        for (int s = 0; s < t->nscenes; s++) {
+            const cell *c = at(t, s, r);
+            if (c->done)
+                value(figure_of(c, f, all), f);
+            else
+                printf(" – |");
+        }
+        printf("\n");
+    }
+}
+
+/* The paper's SAH and PER rows of a figure (primary rays only). */
+static void paper_rows(const table *t, enum figure f)
+{
+    for (int per = 0; per < 2; per++) {
+        printf("| %s (paper) |", per ? "PER" : "SAH");
+        for (int s = 0; s < t->nscenes; s++) {
+            const paper_figures *p = paper_of(t->scenes[s]);
+            double v = !p                ? NAN
+                       : f == F_LEAVES   ? (per ? p->leaves_per : p->leaves_sah)
+                       : f == F_NIT      ? (per ? p->nit_per : p->nit_sah)
+                                         : (per ? p->nts_per : p->nts_sah);
+            if (isnan(v))
+                printf(" – |");
+            else
+                value(v, f);
+        }
+        printf("\n");
+    }
+}
+
+/* Coverage and ray counts of the two cameras: the first rule of each. */
+static void camera_rows(const table *t, enum figure f, int all, const char *label)
+{
+    for (int ortho = 0; ortho < 2; ortho++) {
+        int r0 = -1;
+        for (int r = 0; r < t->o->nrules && r0 < 0; r++)
+            if (t->o->rules[r].ortho == ortho)
+                r0 = r;
+        if (r0 < 0)
+            continue;
+        printf("| %s%s |", label, ortho ? ", ortho" : "");
+        for (int s = 0; s < t->nscenes; s++) {
+            const cell *c = at(t, s, r0);
+            if (c->done)
+                value(figure_of(c, f, all), f);
+            else
+                printf(" – |");
+        }
+        printf("\n");
+    }
+}
+
+/* The change of a figure from rule A to rule B in percent, per scene. */
+static void change_row(const table *t, int a, int b, enum figure f, int all, const char *what)
+{
+    printf("| %s: %s vs %s |", what, t->o->rules[b].label, t->o->rules[a].label);
+    for (int s = 0; s < t->nscenes; s++) {
+        const cell *ca = at(t, s, a), *cb = at(t, s, b);
+        double va = ca->done ? figure_of(ca, f, all) : 0.0;
+        double vb = cb->done ? figure_of(cb, f, all) : 0.0;
+        if (ca->done && cb->done && va > 0.0)
+            printf(" %+.1f%% |", 100.0 * (vb - va) / va);
+        else
+            printf(" – |");
+    }
+    printf("\n");
+}
+
+static int find_rule(const paper_opts *o, bsp_accel_kind k, int ortho)
+{
+    for (int r = 0; r < o->nrules; r++)
+        if (o->rules[r].kind == k && o->rules[r].ortho == ortho)
+            return r;
+    return -1;
+}
+
+static void print_tables(const table *t)
+{
+    const paper_opts *o = t->o;
+    printf("\n### Primary rays (as the paper counts them)\n\n");
+    header(t, "scene");
+    camera_rows(t, F_COV, 0, "ScnCov[%]");
+    printf("| ScnCov[%%] (paper) |");
+    for (int s = 0; s < t->nscenes; s++) {
+        const paper_figures *p = paper_of(t->scenes[s]);
+        if (p)
+            printf(" %.2f |", p->cov);
+        else
+            printf(" – |");
+    }
+    printf("\n");
+    camera_rows(t, F_RAYS, 0, "#rays [x10^4]");
+    rule_rows(t, "# leaves of the BSP tree", F_LEAVES, 0);
+    paper_rows(t, F_LEAVES);
+    rule_rows(t, "# intersection tests per ray", F_NIT, 0);
+    paper_rows(t, F_NIT);
+    rule_rows(t, "# traversal steps per ray", F_NTS, 0);
+    paper_rows(t, F_NTS);
+
+    printf("\n### All rays (primary, shadow, reflected, refracted)\n\n");
+    header(t, "scene");
+    rule_rows(t, "#rays [x10^4]", F_RAYS, 1);
+    rule_rows(t, "# intersection tests per ray", F_NIT, 1);
+    rule_rows(t, "# traversal steps per ray", F_NTS, 1);
+
+    printf("\n### Times (seconds; render on %d thread%s)\n\n", o->threads,
+           o->threads == 1 ? "" : "s");
+    header(t, "scene");
+    rule_rows(t, "T_B build", F_TB, 0);
+    rule_rows(t, "T_TR render", F_TR, 0);
+
+    int sah = find_rule(o, BSP_ACCEL_SAH, 0), per = find_rule(o, BSP_ACCEL_SAH_PER, 0);
+    int mixed = find_rule(o, BSP_ACCEL_SAH_MIXED, 0), kap = find_rule(o, BSP_ACCEL_KAPLAN, 0);
+    int sah_o = find_rule(o, BSP_ACCEL_SAH, 1), par = find_rule(o, BSP_ACCEL_SAH_PAR, 1);
+    if (sah < 0)
+        return;
+    printf("\n### Changes against sah (negative: fewer / faster)\n\n");
+    header(t, "change");
+    if (per >= 0) {
+        change_row(t, sah, per, F_NIT, 0, "N_IT primary");
+        change_row(t, sah, per, F_NTS, 0, "N_TS primary");
+        change_row(t, sah, per, F_NIT, 1, "N_IT all");
+        change_row(t, sah, per, F_TR, 0, "T_TR");
+    }
+    if (mixed >= 0) {
+        change_row(t, sah, mixed, F_NIT, 0, "N_IT primary");
+        change_row(t, sah, mixed, F_NIT, 1, "N_IT all");
+        change_row(t, sah, mixed, F_TR, 0, "T_TR");
+    }
+    if (par >= 0 && sah_o >= 0) {
+        change_row(t, sah_o, par, F_NIT, 0, "N_IT primary");
+        change_row(t, sah_o, par, F_NTS, 0, "N_TS primary");
+        change_row(t, sah_o, par, F_TR, 0, "T_TR");
+    }
+    if (kap >= 0)
+        change_row(t, kap, sah, F_TR, 0, "T_TR");
+}
+
+static void csv_rows(FILE *f, const table *t)
+{
+    fprintf(f, "scene,accel,camera,rays,ScnCov,nrays,N_V,N_IT,N_TS,T_B,T_TR,threads\n");
+    for (int s = 0; s < t->nscenes; s++)
+        for (int r = 0; r < t->o->nrules; r++) {
+            const cell *c = at(t, s, r);
+            if (!c->done)
+                continue;
+            const paper_rule *pr = &t->o->rules[r];
+            for (int all = 0; all < 2; all++)
+                fprintf(f, "%s,%s,%s,%s,%.4f,%" PRIu64 ",%" PRIu64 ",%.4f,%.4f,%.6f,%.6f,%d\n",
+                        t->scenes[s], bsp_accel_kind_name(pr->kind),
+                        pr->ortho ? "ortho" : "perspective", all ? "all" : "primary",
+                        figure_of(c, F_COV, 0), all ? c->rays_all : c->rays_primary,
+                        c->tree.leaves, all ? c->nit_all : c->nit_primary,
+                        all ? c->nts_all : c->nts_primary, c->t_build, c->t_render,
+                        t->o->threads);
+        }
+}
+
+int bench_paper(int argc, char **argv)
+{
+    args a = {argc, 1, argv, paper_usage};
+    paper_opts o;
+    memset(&o, 0, sizeof o);
+    o.res = 513;
+    o.depth = 4;
+    o.threads = 1;
+    o.nvalidate = 5000;
+    o.nrules = (int)(sizeof default_rules / sizeof default_rules[0]);
+    memcpy(o.rules, default_rules, sizeof default_rules);
+    const char *csv_path = NULL;
+    size_t ndefault = sizeof paper_scenes / sizeof paper_scenes[0];
+    const char **scenes = calloc((size_t)argc + ndefault + 1, sizeof *scenes);
+    if (!scenes) {
+        fprintf(stderr, "%s: out of memory\n", prog);
+        return EXIT_INPUT;
+    }
+    int nscenes = 0;
+    for (; a.i < argc; a.i++) {
+        const char *s = argv[a.i];
+        if (is_help(s)) {
+            print_help();
+            free(scenes);
+            return 0;
+        } else if (!strcmp(s, "--paper")) {
+            continue;
+        } else if (!strcmp(s, "--accel")) {
+            parse_rules(&a, &o);
+        } else if (!strcmp(s, "--res")) {
+            o.res = parse_int(&a, s, 2, 65536);
+        } else if (!strcmp(s, "--depth")) {
+            o.depth = parse_int(&a, s, 0, 64);
+        } else if (!strcmp(s, "--threads")) {
+            o.threads = parse_int(&a, s, 1, 256);
+        } else if (!strcmp(s, "--validate")) {
+            o.nvalidate = parse_int(&a, s, 0, 100000000);
+        } else if (!strcmp(s, "--csv")) {
+            csv_path = opt_value(&a, s);
+        } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
+            o.quiet = 1;
+        } else if (s[0] == '-' && s[1]) {
+            die_usage(a.usage, "unknown option '%s'", s);
+        } else {
+            scenes[nscenes++] = s;
+        }
+    }
+    if (nscenes == 0)
+        for (size_t i = 0; i < ndefault; i++)
+            scenes[nscenes++] = paper_scenes[i];
+    FILE *csv = NULL;
+    if (csv_path && !(csv = fopen(csv_path, "w"))) {
+        fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, csv_path, strerror(errno));
+        free(scenes);
+        return EXIT_INPUT;
+    }
+    table t = {&o, scenes, nscenes, calloc((size_t)nscenes * (size_t)o.nrules, sizeof(cell))};
+    if (!t.cells) {
+        fprintf(stderr, "%s: out of memory\n", prog);
+        if (csv)
+            fclose(csv);
+        free(scenes);
+        return EXIT_INPUT;
+    }
+    printf("## Table 1: BSP trees for restricted ray sets (%d x %d rays, ray depth %d, tree "
+           "depth 18, 2 primitives per leaf, mailboxes)\n",
+           o.res, o.res, o.depth);
+    int rc = 0;
+    for (int s = 0; s < nscenes && rc == 0; s++) {
+        bsp_scene *scene = load_scene(scenes[s]);
+        if (!bsp_scene_camera(scene)) {
+            fprintf(stderr, "%s: %s: no camera; skipped\n", prog, scenes[s]);
+            bsp_scene_destroy(scene);
+            continue;
+        }
+        bsp_build_options nb;
+        bsp_build_options_defaults(&nb);
+        nb.kind = BSP_ACCEL_NAIVE; /* the reference */
+        bsp_accel *naive = build_accel(scene, &nb);
+        for (int r = 0; r < o.nrules && rc == 0; r++)
+            rc = run_cell(&o, scenes[s], scene, naive, &o.rules[r],
+                          &t.cells[(size_t)s * (size_t)o.nrules + (size_t)r]);
+        bsp_accel_destroy(naive);
+        bsp_scene_destroy(scene);
+    }
+    if (rc == 0)
+        print_tables(&t);
+    if (csv) {
+        csv_rows(csv, &t);
+        if (fclose(csv) != 0) {
+            fprintf(stderr, "%s: %s: write failed: %s\n", prog, csv_path, strerror(errno));
+            rc = 1;
+        }
+    }
+    free(t.cells);
+    free(scenes);
+    return rc ? EXIT_INPUT : 0;
+}
