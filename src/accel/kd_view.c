@@ -173,6 +173,27 @@ static double polygon_area(const pt2 *p, int n)
 static const unsigned char box_edges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
                                                {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
 
+/* The area of polygon P[0..N) clipped to the viewport of V (P and the
+ * scratch Q have room for N + 4 vertices; P is overwritten). */
+static double clipped_area(const kd_view *v, pt2 *p, int n, pt2 *q)
+{
+    n = clip_half(p, n, 0, 1.0, v->hx, q);
+    n = clip_half(q, n, 0, -1.0, v->hx, p);
+    n = clip_half(p, n, 1, 1.0, v->hy, q);
+    n = clip_half(q, n, 1, -1.0, v->hy, p);
+    return n >= 3 ? polygon_area(p, n) : 0.0;
+}
+
+/* Corner indices of the face of axis K on side S (0 lo, 1 hi), in cyclic order. */
+static void face_corners(int k, int side, int c[4])
+{
+    int j1 = (k + 1) % 3, j2 = (k + 2) % 3, base = side << k;
+    c[0] = base;
+    c[1] = base | 1 << j1;
+    c[2] = base | 1 << j1 | 1 << j2;
+    c[3] = base | 1 << j2;
+}
+
 double kd_view_area(const bsp_box *box, const void *ctx)
 {
     const kd_view *v = ctx;
@@ -181,15 +202,24 @@ double kd_view_area(const bsp_box *box, const void *ctx)
         v->eye.y <= box->hi.y && v->eye.z >= box->lo.z && v->eye.z <= box->hi.z)
         return vp_area; /* seen from inside: every ray crosses it */
 
-    /* corners in the view frame: (across, up, depth) */
+    /* corners in the view frame: (across, up, depth); corner c has bit k
+     * set when it is on the hi side of axis k */
     double cx[8], cy[8], cz[8];
-    for (int c = 0; c < 8; c++) {
-        bsp_vec3 p = {{c & 1 ? box->hi.x : box->lo.x, c & 2 ? box->hi.y : box->lo.y,
-                       c & 4 ? box->hi.z : box->lo.z}};
-        bsp_vec3 d = v3_sub(p, v->eye);
-        cx[c] = v3_dot(d, v->right);
-        cy[c] = v3_dot(d, v->up);
-        cz[c] = v3_dot(d, v->fwd);
+    {
+        bsp_vec3 d0 = v3_sub(box->lo, v->eye);
+        double bx = v3_dot(d0, v->right), by = v3_dot(d0, v->up), bz = v3_dot(d0, v->fwd);
+        double ex[3], ey[3], ez[3];
+        for (int k = 0; k < 3; k++) {
+            double w = box->hi.v[k] - box->lo.v[k];
+            ex[k] = w * v->right.v[k];
+            ey[k] = w * v->up.v[k];
+            ez[k] = w * v->fwd.v[k];
+        }
+        for (int c = 0; c < 8; c++) {
+            cx[c] = bx + (c & 1 ? ex[0] : 0.0) + (c & 2 ? ex[1] : 0.0) + (c & 4 ? ex[2] : 0.0);
+            cy[c] = by + (c & 1 ? ey[0] : 0.0) + (c & 2 ? ey[1] : 0.0) + (c & 4 ? ey[2] : 0.0);
+            cz[c] = bz + (c & 1 ? ez[0] : 0.0) + (c & 2 ? ez[1] : 0.0) + (c & 4 ? ez[2] : 0.0);
+        }
     }
     /* near: PAR rays start on the window's plane; PER projects from the eye,
      * so the polytope is cut a hair in front of it (relative to the box's
@@ -200,37 +230,63 @@ double kd_view_area(const bsp_box *box, const void *ctx)
         near = 1e-9 * ext;
     }
     pt2 pts[8 + 12], hull[2 * (8 + 12)], tmp[2 * (8 + 12) + 8];
+    int front = 0;
+    for (int c = 0; c < 8; c++)
+        front += cz[c] >= near;
+    if (front == 0)
+        return 0.0; /* wholly behind */
+
+    if (front == 8) {
+        /* wholly in front: the projections of the faces turned towards the
+         * rays tile the silhouette, so the area is their sum (no hull) */
+        pt2 proj[8];
+        int inside = 1;
+        for (int c = 0; c < 8; c++) {
+            proj[c] = v->ortho ? (pt2){cx[c], cy[c]} : (pt2){cx[c] / cz[c], cy[c] / cz[c]};
+            inside &= fabs(proj[c].x) <= v->hx && fabs(proj[c].y) <= v->hy;
+        }
+        double a = 0.0;
+        for (int k = 0; k < 3; k++) {
+            for (int side = 0; side < 2; side++) {
+                /* PER: the face is seen when the eye is outside its plane;
+                 * PAR: when the rays run against its outward normal */
+                int seen = v->ortho ? (side ? v->fwd.v[k] < 0.0 : v->fwd.v[k] > 0.0)
+                                    : (side ? v->eye.v[k] > box->hi.v[k]
+                                            : v->eye.v[k] < box->lo.v[k]);
+                if (!seen)
+                    continue;
+                int fc[4];
+                face_corners(k, side, fc);
+                pt2 quad[4 + 4];
+                for (int i = 0; i < 4; i++)
+                    quad[i] = proj[fc[i]];
+                a += inside ? polygon_area(quad, 4) : clipped_area(v, quad, 4, tmp);
+            }
+        }
+        return a < vp_area ? a : vp_area;
+    }
+
+    /* straddling the start plane: the hull of the part in front */
     int n = 0;
     for (int c = 0; c < 8; c++) {
         if (!(cz[c] >= near))
             continue;
         pts[n++] = v->ortho ? (pt2){cx[c], cy[c]} : (pt2){cx[c] / cz[c], cy[c] / cz[c]};
     }
-    if (n == 0)
-        return 0.0; /* wholly behind */
-    if (n < 8) {
-        for (int e = 0; e < 12; e++) {
-            int a = box_edges[e][0], b = box_edges[e][1];
-            double za = cz[a] - near, zb = cz[b] - near;
-            if ((za < 0.0) == (zb < 0.0))
-                continue;
-            double u = za / (za - zb);
-            double x = cx[a] + u * (cx[b] - cx[a]), y = cy[a] + u * (cy[b] - cy[a]);
-            double z = v->ortho ? 1.0 : near;
-            pts[n++] = (pt2){x / z, y / z};
-        }
+    for (int e = 0; e < 12; e++) {
+        int ia = box_edges[e][0], ib = box_edges[e][1];
+        double za = cz[ia] - near, zb = cz[ib] - near;
+        if ((za < 0.0) == (zb < 0.0))
+            continue;
+        double u = za / (za - zb);
+        double x = cx[ia] + u * (cx[ib] - cx[ia]), y = cy[ia] + u * (cy[ib] - cy[ia]);
+        double z = v->ortho ? 1.0 : near;
+        pts[n++] = (pt2){x / z, y / z};
     }
     int h = convex_hull(pts, n, hull);
     if (h < 3)
         return 0.0;
-    /* clip to [-hx, hx] x [-hy, hy] */
-    h = clip_half(hull, h, 0, 1.0, v->hx, tmp);
-    h = clip_half(tmp, h, 0, -1.0, v->hx, hull);
-    h = clip_half(hull, h, 1, 1.0, v->hy, tmp);
-    h = clip_half(tmp, h, 1, -1.0, v->hy, hull);
-    if (h < 3)
-        return 0.0;
-    double a = polygon_area(hull, h);
+    double a = clipped_area(v, hull, h, tmp);
     return a < vp_area ? a : vp_area;
 }
 
