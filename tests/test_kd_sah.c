@@ -252,8 +252,8 @@ typedef struct bf_prim {
 static double bf_cost(const bf_prim *ps, size_t n, bsp_box cell, int axis, double s,
                       const kd_cost_model *m)
 {
-    double tl = 0, tr = 0;
-    size_t nl = 0, nr = 0;
+    double tl = 0, tr = 0, ts = 0;
+    size_t nl = 0, nr = 0, ns = 0;
     for (size_t i = 0; i < n; i++) {
         if (ps[i].box.lo.v[axis] < s) {
             tl += ps[i].cost;
@@ -263,11 +263,17 @@ static double bf_cost(const bf_prim *ps, size_t n, bsp_box cell, int axis, doubl
             tr += ps[i].cost;
             nr++;
         }
+        if (ps[i].box.lo.v[axis] < s && ps[i].box.hi.v[axis] > s) {
+            ts += ps[i].cost;
+            ns++;
+        }
     }
     bsp_box l = cell, r = cell;
     l.hi.v[axis] = r.lo.v[axis] = s;
-    double c = m->c.traversal +
-               (kd_surface_area(&l) * tl + kd_surface_area(&r) * tr) / kd_surface_area(&cell);
+    double al = kd_surface_area(&l), ar = kd_surface_area(&r), a = kd_surface_area(&cell);
+    /* with mailboxes a ray through both children tests a straddler once */
+    double save = m->mailbox ? (al + ar - a) * fmax(0.0, ts - m->mailbox_hit * (double)ns) : 0.0;
+    double c = m->c.traversal + (al * tl + ar * tr - save) / a;
     if (nl == 0 || nr == 0)
         c *= 1.0 - m->empty_bonus;
     return c;

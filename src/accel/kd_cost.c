@@ -74,6 +74,8 @@ void kd_cost_resolve(const bsp_build_options *o, kd_cost_model *m)
     else if (b > 0.99)
         b = 0.99;
     m->empty_bonus = b;
+    m->mailbox = o->mailbox != 0;
+    m->mailbox_hit = KD_MAILBOX_HIT_COST * m->c.traversal;
 }
 
 double kd_prim_cost(const bsp_scene *scene, uint32_t prim, const bsp_sah_costs *c)
