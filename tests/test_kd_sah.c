@@ -980,3 +980,49 @@ TEST(sah_scaling_report)
         bsp_scene_destroy(s);
     }
 }
+
+/* --- split to the limits (the paper's termination criteria) ----------------- */
+
+typedef struct limit_walk {
+    int max_depth, leaf_size;
+    int violations; /* leaves above the leaf size before the depth limit */
+    int leaves;
+} limit_walk;
+
+static int count_limit_leaf(const bsp_cell_info *c, void *ctx)
+{
+    limit_walk *w = ctx;
+    if (c->is_leaf) {
+        w->leaves++;
+        w->violations += c->refs > (uint64_t)w->leaf_size && c->depth < w->max_depth;
+    }
+    return 1;
+}
+
+TEST(sah_split_to_limits_ends_only_at_the_limits)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load("spd:shells:2", &s, &err) == BSP_OK);
+    for (int to_limits = 0; to_limits < 2; to_limits++) {
+        for (int k = BSP_ACCEL_SAH; k <= BSP_ACCEL_SAH_MIXED; k++) {
+            bsp_build_options o = sah_options();
+            o.kind = (bsp_accel_kind)k;
+            o.max_depth = 12;
+            o.max_leaf_prims = 2;
+            o.sah_split_to_limits = to_limits;
+            o.mixed_primary_share = 0.3;
+            bsp_accel *a = build(s, &o);
+            limit_walk w = {12, 2, 0, 0};
+            REQUIRE(bsp_accel_visit_cells(a, -1, count_limit_leaf, &w, &err) == BSP_OK);
+            if (to_limits)
+                CHECK_MSG(w.violations == 0, "%s: %d of %d leaves hold more than 2 primitives "
+                          "above depth 12", bsp_accel_kind_name(o.kind), w.violations, w.leaves);
+            else if (k == BSP_ACCEL_SAH) /* the cost makes larger leaves of nested spheres */
+                CHECK_MSG(w.violations > 0, "cost termination made no early leaf (%d leaves)",
+                          w.leaves);
+            bsp_accel_destroy(a);
+        }
+    }
+    bsp_scene_destroy(s);
+}

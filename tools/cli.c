@@ -148,6 +148,8 @@ const char build_args_help[] =
     "  --max-depth N      kd-tree: deepest leaf (default kaplan 18, sah round(8 + 1.3 log2 N))\n"
     "  --leaf-size N      kd-tree: a node of at most N primitives is a leaf (default kaplan\n"
     "                     2, sah 1: the cost decides); the paper: --max-depth 18 --leaf-size 2\n"
+    "  --split-to-limits  sah family: split until --max-depth or --leaf-size ends it, even\n"
+    "                     where the cost model would make a leaf (the paper's criteria)\n"
     "  --mixed-share F    sah-mixed: share of primary rays among all rays, in (0, 1]\n"
     "                     (default: measured by a 65 x 65 pre-pass)\n";
 
@@ -162,6 +164,8 @@ int parse_build_arg(args *a, bsp_build_options *opts)
         opts->max_depth = parse_int(a, s, 1, BSP_KD_MAX_DEPTH_LIMIT);
     } else if (!strcmp(s, "--leaf-size")) {
         opts->max_leaf_prims = parse_int(a, s, 1, 1 << 20);
+    } else if (!strcmp(s, "--split-to-limits")) {
+        opts->sah_split_to_limits = 1;
     } else if (!strcmp(s, "--mixed-share")) {
         opts->mixed_primary_share =
             parse_real(a, s, opt_value(a, s), in_share_range, "a number in (0, 1]");

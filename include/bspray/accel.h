@@ -87,6 +87,9 @@ typedef struct bsp_build_options {
     bsp_sah_costs sah_costs; /* sah: cost model; 0 fields take the defaults */
     double sah_empty_bonus;  /* sah: a split with one empty side costs (1 - bonus) times
                                 its cost; 0: the default (0.1), negative: no bonus */
+    int sah_split_to_limits; /* sah family: 1 splits every node until max_depth or
+                                max_leaf_prims ends it (the paper's termination criteria);
+                                0 (default): also a leaf when the best split does not pay */
     bsp_view view;           /* sah-per, sah-par, sah-mixed: the camera (default: the scene's) */
     double mixed_primary_share; /* sah-mixed: primary rays / all rays of the render, in
                                    (0, 1]; 0: measured by a 65 x 65 pre-pass of the Whitted

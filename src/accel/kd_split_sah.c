@@ -238,6 +238,7 @@ typedef struct sah_build {
     kd_area_fn area;
     const void *actx;
     int surface;        /* AREA is the surface area: evaluated inline */
+    int to_limits;      /* split until the depth/leaf-size limits, whatever the cost */
     double ctrav;       /* C_trav */
     double bonus_mul;   /* 1 - empty bonus */
     int mailbox;        /* mailbox-aware costs (kd_cost_model.mailbox) */
@@ -555,7 +556,7 @@ static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     if (!best.found)
         return make_leaf(b, node, b->ev + L.base, n);
     int bad_here = 0;
-    if (best.cost >= tsum) {
+    if (best.cost >= tsum && !b->to_limits) {
         if (bad >= MAX_BAD_REFINES || (best.cost > 4.0 * tsum && n < 16))
             return make_leaf(b, node, b->ev + L.base, n);
         bad_here = 1;
@@ -740,6 +741,7 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     b.area = area;
     b.actx = ctx;
     b.surface = area == kd_area_surface;
+    b.to_limits = o->sah_split_to_limits != 0;
     b.ctrav = cm.c.traversal;
     b.bonus_mul = 1.0 - cm.empty_bonus;
     b.mailbox = cm.mailbox;
