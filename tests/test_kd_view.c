@@ -259,3 +259,47 @@ TEST(view_orthographic_render_rays)
     bsp_accel_destroy(a);
     bsp_scene_destroy(s);
 }
+
+/* The sah-mixed pre-pass: its share of primary rays is the share in an
+ * ordinary render (naive method) through the same camera. */
+TEST(view_mixed_prepass_share)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load("spd:balls:1", &s, &err) == BSP_OK);
+    bsp_camera cam = *bsp_scene_camera(s);
+    cam.res_x = cam.res_y = 32; /* 33 x 33 rays */
+    double share = 0.0;
+    REQUIRE(bsp_measure_primary_share(s, &cam, 4, &share, &err) == BSP_OK);
+
+    bsp_build_options bo;
+    bsp_build_options_defaults(&bo);
+    bo.kind = BSP_ACCEL_NAIVE;
+    bsp_accel *a = NULL;
+    REQUIRE(bsp_accel_build(s, &bo, &a, &err) == BSP_OK);
+    bsp_render_options ro;
+    bsp_render_options_defaults(&ro);
+    ro.camera = &cam;
+    ro.threads = 1;
+    bsp_image *img = NULL;
+    bsp_render_stats st;
+    REQUIRE(bsp_render(a, &ro, &img, &st, &err) == BSP_OK);
+    uint64_t all = 0;
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++)
+        all += st.cls[c].rays;
+    CHECK_EQ_INT(st.cls[BSP_RAY_PRIMARY].rays, 33 * 33);
+    CHECK(all > st.cls[BSP_RAY_PRIMARY].rays); /* balls has shadows and reflections */
+    CHECK_NEAR(share, (double)st.cls[BSP_RAY_PRIMARY].rays / (double)all, 1e-15);
+    bsp_image_destroy(img);
+    bsp_accel_destroy(a);
+
+    /* a mixed build with the share given and one measuring it: both exact
+     * trees; an invalid share is an error */
+    bsp_build_options mo;
+    bsp_build_options_defaults(&mo);
+    mo.kind = BSP_ACCEL_SAH_MIXED;
+    mo.mixed_primary_share = 1.5;
+    CHECK(bsp_accel_build(s, &mo, &a, &err) == BSP_ERR_INVALID);
+    CHECK_STR_CONTAINS(err.message, "share");
+    bsp_scene_destroy(s);
+}
