@@ -641,76 +641,6 @@ static bsp_status load_buffer(const char *buf, size_t len, const char *name, bsp
     return st;
 }
 
-/* Reads the whole file PATH into *OUT (free with free()). */
-static bsp_status read_file(const char *path, char **out, size_t *outlen, bsp_error *err)
-{
-    FILE *fp = fopen(path, "rb");
-    if (!fp)
-        return error_set(err, BSP_ERR_IO, path, 0, "cannot open: %s", strerror(errno));
-    size_t cap = (size_t)1 << 16;
-    struct stat st;
-    if (fstat(fileno(fp), &st) == 0) {
-        if (S_ISDIR(st.st_mode)) {
-            fclose(fp);
-            return error_set(err, BSP_ERR_IO, path, 0, "cannot open: %s", strerror(EISDIR));
-        }
-        if (S_ISREG(st.st_mode)) {
-            if ((uintmax_t)st.st_size > NFF_MAX_INPUT) {
-                fclose(fp);
-                return error_set(err, BSP_ERR_LIMIT, path, 0, "file is larger than %zu bytes (%jd)",
-                                 NFF_MAX_INPUT, (intmax_t)st.st_size);
-            }
-            cap = (size_t)st.st_size + 1; /* +1: end of file seen without a regrow */
-        }
-    }
-    char *buf = malloc(cap);
-    size_t used = 0;
-    if (!buf) {
-        fclose(fp);
-        return error_set(err, BSP_ERR_NOMEM, path, 0, "out of memory");
-    }
-    for (;;) {
-        if (used == cap) {
-            if (cap > NFF_MAX_INPUT) {
-                free(buf);
-                fclose(fp);
-                return error_set(err, BSP_ERR_LIMIT, path, 0, "file is larger than %zu bytes",
-                                 NFF_MAX_INPUT);
-            }
-            size_t ncap = cap * 2 > NFF_MAX_INPUT + 1 ? NFF_MAX_INPUT + 1 : cap * 2;
-            char *nb = realloc(buf, ncap);
-            if (!nb) {
-                free(buf);
-                fclose(fp);
-                return error_set(err, BSP_ERR_NOMEM, path, 0, "out of memory");
-            }
-            buf = nb;
-            cap = ncap;
-        }
-        size_t got = fread(buf + used, 1, cap - used, fp);
-        used += got;
-        if (got == 0 || used < cap) {
-            if (ferror(fp)) {
-                int e = errno;
-                free(buf);
-                fclose(fp);
-                return error_set(err, BSP_ERR_IO, path, 0, "read error: %s", strerror(e));
-            }
-            if (feof(fp))
-                break;
-        }
-    }
-    fclose(fp);
-    if (used > NFF_MAX_INPUT) {
-        free(buf);
-        return error_set(err, BSP_ERR_LIMIT, path, 0, "file is larger than %zu bytes",
-                         NFF_MAX_INPUT);
-    }
-    *out = buf;
-    *outlen = used;
-    return BSP_OK;
-}
-
 /* --- public ----------------------------------------------------------------- */
 
 bsp_status bsp_scene_load_nff_memory(const char *buf, size_t len, const char *name, bsp_scene **out,
@@ -738,7 +668,7 @@ bsp_status nff_load_file(const char *path, bsp_scene **out, bsp_error *err)
         return error_set(err, BSP_ERR_INVALID, NULL, 0, "no path");
     char *buf = NULL;
     size_t len = 0;
-    bsp_status st = read_file(path, &buf, &len, err);
+    bsp_status st = mesh_read_file(path, &buf, &len, err); /* same 2 GiB limit */
     if (st != BSP_OK)
         return st;
     st = load_buffer(buf, len, path, out, err);

@@ -312,6 +312,40 @@ bsp_status mesh_read_file(const char *path, char **out, size_t *outlen, bsp_erro
     return BSP_OK;
 }
 
+bsp_status mesh_load_memory(mesh_parse_fn parse, const char *buf, size_t len, const char *name,
+                            bsp_scene **out, bsp_error *err)
+{
+    if (!out)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no output pointer");
+    *out = NULL;
+    if (!name)
+        name = "<memory>";
+    if (!buf && len)
+        return error_set(err, BSP_ERR_INVALID, name, 0, "no buffer");
+    if (len > MESH_MAX_INPUT)
+        return error_set(err, BSP_ERR_LIMIT, name, 0, "input is larger than %zu bytes",
+                         MESH_MAX_INPUT);
+    return parse(buf ? buf : "", len, name, out, err);
+}
+
+bsp_status mesh_load_file(mesh_parse_fn parse, const char *path, bsp_scene **out,
+                          bsp_error *err)
+{
+    if (!out)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no output pointer");
+    *out = NULL;
+    if (!path)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no path");
+    char *buf = NULL;
+    size_t len = 0;
+    bsp_status st = mesh_read_file(path, &buf, &len, err);
+    if (st != BSP_OK)
+        return st;
+    st = parse(buf, len, path, out, err);
+    free(buf);
+    return st;
+}
+
 /* White, mostly diffuse, with a little specular highlight. */
 static const bsp_material mesh_material = {{1.0, 1.0, 1.0}, 0.8, 0.1, 30.0, 0.0, 1.0};
 
@@ -865,32 +899,10 @@ static bsp_status parse_obj(const char *buf, size_t len, const char *name, bsp_s
 bsp_status obj_load_memory(const char *buf, size_t len, const char *name, bsp_scene **out,
                            bsp_error *err)
 {
-    if (!out)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no output pointer");
-    *out = NULL;
-    if (!name)
-        name = "<memory>";
-    if (!buf && len)
-        return error_set(err, BSP_ERR_INVALID, name, 0, "no buffer");
-    if (len > MESH_MAX_INPUT)
-        return error_set(err, BSP_ERR_LIMIT, name, 0, "input is larger than %zu bytes",
-                         MESH_MAX_INPUT);
-    return parse_obj(buf ? buf : "", len, name, out, err);
+    return mesh_load_memory(parse_obj, buf, len, name, out, err);
 }
 
 bsp_status obj_load_file(const char *path, bsp_scene **out, bsp_error *err)
 {
-    if (!out)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no output pointer");
-    *out = NULL;
-    if (!path)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no path");
-    char *buf = NULL;
-    size_t len = 0;
-    bsp_status st = mesh_read_file(path, &buf, &len, err);
-    if (st != BSP_OK)
-        return st;
-    st = parse_obj(buf, len, path, out, err);
-    free(buf);
-    return st;
+    return mesh_load_file(parse_obj, path, out, err);
 }

@@ -830,32 +830,10 @@ done:
 bsp_status ply_load_memory(const char *buf, size_t len, const char *name, bsp_scene **out,
                            bsp_error *err)
 {
-    if (!out)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no output pointer");
-    *out = NULL;
-    if (!name)
-        name = "<memory>";
-    if (!buf && len)
-        return error_set(err, BSP_ERR_INVALID, name, 0, "no buffer");
-    if (len > MESH_MAX_INPUT)
-        return error_set(err, BSP_ERR_LIMIT, name, 0, "input is larger than %zu bytes",
-                         MESH_MAX_INPUT);
-    return parse_ply(buf ? buf : "", len, name, out, err);
+    return mesh_load_memory(parse_ply, buf, len, name, out, err);
 }
 
 bsp_status ply_load_file(const char *path, bsp_scene **out, bsp_error *err)
 {
-    if (!out)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no output pointer");
-    *out = NULL;
-    if (!path)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no path");
-    char *buf = NULL;
-    size_t len = 0;
-    bsp_status st = mesh_read_file(path, &buf, &len, err);
-    if (st != BSP_OK)
-        return st;
-    st = parse_ply(buf, len, path, out, err);
-    free(buf);
-    return st;
+    return mesh_load_file(parse_ply, path, out, err);
 }
