@@ -28,13 +28,6 @@ static const char paper_usage[] =
     "                     [--validate N] [--repeat N] [--cost-termination] [--csv FILE]\n"
     "                     [--quiet]";
 
-/* The default scenes: the paper's three SPD scenes first (its fourth,
- * "fluid", is not an SPD database), then every other SPD scene. */
-static const char *const paper_scenes[] = {
-    "spd:lattice", "spd:rings", "spd:tree",   "spd:balls",  "spd:gears",
-    "spd:mount",   "spd:teapot:12", "spd:tetra", "spd:shells", "spd:jacks",
-    "spd:sombrero", "spd:sample", "spd:nurbtst"};
-
 typedef struct paper_rule {
     const char *label;
     bsp_accel_kind kind;
@@ -446,7 +439,9 @@ int bench_paper(int argc, char **argv)
     o.nrules = (int)(sizeof default_rules / sizeof default_rules[0]);
     memcpy(o.rules, default_rules, sizeof default_rules);
     const char *csv_path = NULL;
-    size_t ndefault = sizeof paper_scenes / sizeof paper_scenes[0];
+    size_t ndefault = 0;
+    while (bench_default_scenes[ndefault])
+        ndefault++;
     const char **scenes = calloc((size_t)argc + ndefault + 1, sizeof *scenes);
     if (!scenes) {
         fprintf(stderr, "%s: out of memory\n", prog);
@@ -487,7 +482,7 @@ int bench_paper(int argc, char **argv)
     }
     if (nscenes == 0)
         for (size_t i = 0; i < ndefault; i++)
-            scenes[nscenes++] = paper_scenes[i];
+            scenes[nscenes++] = bench_default_scenes[i];
     FILE *csv = NULL;
     if (csv_path && !(csv = fopen(csv_path, "w"))) {
         fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, csv_path, strerror(errno));
