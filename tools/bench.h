@@ -1,10 +1,5 @@
 /*
- * bench.h — what `bspray bench` shares with its --paper mode: validation of
- * a method against the naive one, and the paper's tables.
- *
- * NOTE: reconstructed by the SAH agent after it deleted this (then
- * untracked) file by mistake; the original had bench_paper at line 19.
- * Please check it against your copy.
+ * bench.h — what `bspray bench` and its --paper mode (paper.c) share.
  */
 #ifndef BSPRAY_TOOLS_BENCH_H
 #define BSPRAY_TOOLS_BENCH_H
@@ -13,13 +8,18 @@
 
 #include "bspray/bspray.h"
 
-/* Compares ACCEL with NAIVE on NRAND random rays and on a grid of primary
- * rays; returns the number of rays checked, or -1 on the first difference
- * (described in WHAT[0..WHAT_SIZE)). */
+/* Compares ACCEL with NAIVE on NRAND seeded random rays around SCENE and on
+ * a 64 x 64 grid of the camera's eye rays: the same primitive, a
+ * bit-identical t and the same occlusion answer. Returns the number of rays
+ * checked, or -1 at the first difference (described in WHAT). */
 long bench_validate(const bsp_accel *accel, const bsp_accel *naive, const bsp_scene *scene,
                     int nrand, char *what, size_t what_size);
 
-/* `bspray bench --paper`: the paper's tables. */
+/* The default scenes (NULL-terminated): lattice, rings, tree, then every
+ * other SPD scene. */
+extern const char *const bench_default_scenes[];
+
+/* `bspray bench --paper ...`: the paper's Table 1 (paper.c). */
 int bench_paper(int argc, char **argv);
 
 #endif /* BSPRAY_TOOLS_BENCH_H */
