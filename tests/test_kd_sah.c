@@ -341,6 +341,65 @@ TEST(sah_root_plane_is_the_brute_force_optimum)
     CHECK(checked >= 30);
 }
 
+/* The same on larger scenes, where the sweep evaluates only the runs of
+ * events whose lower bound can beat a probe (kd_split_sah.c): clusters of
+ * spheres and triangles (classes of cost) or spheres alone (uniform), with
+ * the mailbox on and off. */
+TEST(sah_root_plane_is_the_brute_force_optimum_on_large_nodes)
+{
+    const int sizes[] = {300, 700, 1500, 1500};
+    for (int trial = 0; trial < 4; trial++) {
+        bsp_scene *s = bsp_scene_create();
+        rng_state = 5000 + (uint64_t)trial;
+        int n = sizes[trial];
+        bsp_vec3 centre[4];
+        for (int c = 0; c < 4; c++)
+            centre[c] = bsp_v3(rnd_in(-20, 20), rnd_in(-20, 20), rnd_in(-20, 20));
+        for (int i = 0; i < n; i++) {
+            bsp_vec3 c = v3_add(centre[i % 4], bsp_v3(rnd_in(-6, 6), rnd_in(-6, 6), rnd_in(-6, 6)));
+            if (trial == 2 || rnd() < 0.5)
+                add_sphere(s, c, rnd_in(0.05, 1.0));
+            else
+                add_tri(s, c, v3_add(c, bsp_v3(rnd_in(-1, 1), rnd_in(-1, 1), rnd_in(-1, 1))),
+                        v3_add(c, bsp_v3(rnd_in(-1, 1), rnd_in(-1, 1), rnd_in(-1, 1))));
+        }
+        bsp_build_options o = sah_options();
+        o.max_leaf_prims = 1;
+        o.mailbox = trial != 3;
+        bsp_accel *a = build(s, &o);
+        const kd_tree *t = tree_of(a);
+        kd_cost_model m;
+        kd_cost_resolve(&o, &m);
+        bf_prim *ps = malloc((size_t)n * sizeof *ps);
+        REQUIRE(ps);
+        for (int i = 0; i < n; i++) {
+            bsp_box b = kd_prim_box(t, s, (uint32_t)i);
+            for (int k = 0; k < 3; k++) {
+                ps[i].box.lo.v[k] = float_down(b.lo.v[k]);
+                ps[i].box.hi.v[k] = float_up(b.hi.v[k]);
+            }
+            ps[i].cost = kd_prim_cost(s, (uint32_t)i, &m.c);
+        }
+        double best = INFINITY;
+        for (int i = 0; i < n; i++)
+            for (int k = 0; k < 3; k++)
+                for (int side = 0; side < 2; side++) {
+                    double sp = side ? ps[i].box.hi.v[k] : ps[i].box.lo.v[k];
+                    if (sp > t->box.lo.v[k] && sp < t->box.hi.v[k])
+                        best = fmin(best, bf_cost(ps, (size_t)n, t->box, k, sp, &m));
+                }
+        const kd_node *root = &t->nodes[0];
+        REQUIRE(!kd_is_leaf(root));
+        double got =
+            bf_cost(ps, (size_t)n, t->box, (int)kd_axis(root), (double)root->u.split, &m);
+        CHECK_MSG(got <= best * (1 + 1e-12), "n %d: root plane costs %.17g, best %.17g", n, got,
+                  best);
+        free(ps);
+        bsp_accel_destroy(a);
+        bsp_scene_destroy(s);
+    }
+}
+
 /* The paper's setting (depth 18, 2 per leaf) is reachable through the options;
  * the default depth is round(8 + 1.3 log2 N). */
 TEST(sah_limits_from_options)

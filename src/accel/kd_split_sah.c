@@ -59,7 +59,10 @@
  * Not used: min-max binning near the root (Mitsuba). Tried with 256 bins
  * above 4096 primitives, it saved ~15% of the build on balls but cost 6-8%
  * of expected cost on tetra (its planes must hit the Sierpinski grid
- * exactly), beyond the 2% allowed.
+ * exactly), beyond the 2% allowed. Instead the sweep of the surface area
+ * (lin_split) is exact and prunes: the cost is linear in exact sums, so a
+ * run of events has a lower bound, and only runs that can beat a probe are
+ * evaluated — the same planes as a full sweep, fewer evaluations.
  *
  * Memory: one event stack addressed by index (growing it is safe). A node's
  * lists are at base + k * stride (stride >= 2n); the right child's lists are
@@ -247,7 +250,10 @@ typedef struct sah_build {
     double unif;        /* COST_UNIFORM: the T_i of every primitive */
     double class_cost[8]; /* COST_CLASS: T_i by the class in event bits 28..30 */
     uint8_t *pclass;    /* COST_CLASS: the class per primitive */
-    float *cost;        /* T_i per primitive (NULL when uniform) */
+    double *cost;       /* T_i per primitive (NULL when uniform), quantized */
+    int linear;         /* every T_i >= mb_hit: the fast sweep's linear cost applies */
+    uint64_t *chunks;   /* the fast sweep's run sums (lin_chunk), grown on demand */
+    size_t chunks_cap;
     uint8_t *cls;       /* per primitive: CLS_* at the latest split it took part in */
     uint64_t *ev;       /* the event stack */
     size_t cap;
@@ -450,6 +456,342 @@ static void sweep(const sah_build *b, const uint64_t *e, size_t m, unsigned k,
     }
 }
 
+/* --- the fast sweep: surface area, linear cost ------------------------------------------------ */
+
+/*
+ * With the surface area, and when every T_i >= T_mb (always with the default
+ * costs; otherwise the sweep above), the cost of a plane p is linear in the
+ * sums it depends on. With half areas al = cross + (p - lo) perim and
+ * ar = cross + (hi - p) perim (cross, perim of the other two axes), the
+ * mailbox saving A(V_B) sum_both (T_i - T_mb) cancels the cross terms:
+ *     C = C_trav + scale * g,
+ *     g = perim ((p - lo) TL + (hi - p) TR) + cross (W + W0),
+ * W = T_mb (NL + NR) and W0 = sum T_i - T_mb n with mailboxes, W = TL + TR
+ * and W0 = 0 without (TL, NL: sum and count of the left side; uniform costs
+ * count primitives, T_i = 1, and put T into scale). g is non-decreasing in
+ * every input, so a run of events whose first position is pf and last pl,
+ * starting from (TL, NL) and ending at (TR, NR), has no candidate cheaper
+ * than g evaluated at (pf, TL, NL, pl, TR, NR). The sums are exact (costs
+ * are multiples of a power of two small enough for every sum of a node: see
+ * quantize_costs), so this bound holds bit for bit, and a sweep of a node with
+ * many events first sums each run of SWEEP_CHUNK events, then evaluates only
+ * the runs whose bound lies below the best cost of a first probe (the run of
+ * least bound on each axis): the same plane as the full sweep, far fewer
+ * evaluations (the cost is smooth at large nodes). The empty bonus applies
+ * only at the first candidate (when no primitive starts at or below the cell)
+ * and at the last event of the list: those two are evaluated apart.
+ */
+#define SWEEP_CHUNK 32
+#define SWEEP_PRUNE_MIN 256 /* events of an axis from which runs are pruned */
+
+typedef struct lin_axis {
+    const uint64_t *e;
+    size_t m;
+    double lo, hi, perim, cross;
+    size_t a, z;        /* the runs cover e[a..z) */
+    int first_bonus;    /* e[a - 1] is a candidate with nothing left of it */
+    int last_bonus;     /* e[m - 1] is a candidate */
+    double tl0, tr0, mc0; /* the state before e[a] (after e[a - 1] when first_bonus) */
+} lin_axis;
+
+typedef struct lin_state {
+    double tl, tr, mc; /* left and right sums, and NL + NR (classes with mailboxes) */
+} lin_state;
+
+typedef struct lin_model {
+    double scale, w0, mbw, ctrav, bonus;
+} lin_model;
+
+static inline double ev_t(const sah_build *b, uint64_t x, int mode)
+{
+    return mode == COST_UNIFORM ? 1.0
+           : mode == COST_CLASS ? b->class_cost[(x >> EV_CLASS_SHIFT) & 7]
+                                : (double)b->cost[ev_prim(x)];
+}
+
+static inline double ev_pos(uint64_t x)
+{
+    return (double)key_float((uint32_t)(x >> 32));
+}
+
+static inline __attribute__((always_inline)) double
+lin_g(const lin_axis *ax, const lin_model *lm, double p_l, double p_r, double tl, double tr,
+      double mc, const int mode, const int mailbox)
+{
+    double w = mailbox ? lm->mbw * (mode == COST_UNIFORM ? tl + tr : mc) : tl + tr;
+    return ax->perim * ((p_l - ax->lo) * tl + (ax->hi - p_r) * tr) + ax->cross * (w + lm->w0);
+}
+
+/* Sweeps e[from..to) from state *ST (left at the state after e[to - 1]),
+ * keeping the least g in *BG at index *BI (strictly less only). */
+static inline __attribute__((always_inline)) void
+lin_run(const sah_build *b, const lin_axis *ax, const lin_model *lm, size_t from, size_t to,
+        lin_state *st, double *bg, size_t *bi, const int mode, const int mailbox)
+{
+    const uint64_t *e = ax->e;
+    const double lo = ax->lo, hi = ax->hi, perim = ax->perim, cross = ax->cross;
+    const double w0 = lm->w0, mbw = lm->mbw;
+    double tl = st->tl, tr = st->tr, mc = st->mc, best = *bg;
+    size_t best_i = *bi;
+    for (size_t i = from; i < to; i++) {
+        uint64_t x = e[i];
+        int start = (int)((x >> 31) & 1);
+        double t = ev_t(b, x, mode);
+        double ts = start ? t : 0.0, te = start ? 0.0 : t;
+        tr -= te;
+        double p = ev_pos(x);
+        double w;
+        if (mailbox && mode != COST_UNIFORM) {
+            mc -= start ? 0.0 : 1.0;
+            w = mbw * mc;
+        } else {
+            w = mailbox ? mbw * (tl + tr) : tl + tr;
+        }
+        double g = perim * ((p - lo) * tl + (hi - p) * tr) + cross * (w + w0);
+        best_i = g < best ? i : best_i;
+        best = g < best ? g : best;
+        tl += ts;
+        if (mailbox && mode != COST_UNIFORM)
+            mc += start ? 1.0 : 0.0;
+    }
+    st->tl = tl;
+    st->tr = tr;
+    st->mc = mc;
+    *bg = best;
+    *bi = best_i;
+}
+
+/* The g of candidate e[i] from the state before it, with the empty bonus
+ * when a side is empty (NL, NR: the counts at the plane). */
+static inline __attribute__((always_inline)) double
+lin_single(const sah_build *b, const lin_axis *ax, const lin_model *lm, size_t i, lin_state *st,
+           size_t nl, size_t nr, const int mode, const int mailbox)
+{
+    uint64_t x = ax->e[i];
+    int start = (int)((x >> 31) & 1);
+    double t = ev_t(b, x, mode);
+    if (!start) {
+        st->tr -= t;
+        st->mc -= 1.0;
+    }
+    double p = ev_pos(x);
+    double g = lin_g(ax, lm, p, p, st->tl, st->tr, st->mc, mode, mailbox);
+    if (start) {
+        st->tl += t;
+        st->mc += 1.0;
+    }
+    if (nl == 0 || nr == 0) {
+        double c = (lm->ctrav + lm->scale * g) * lm->bonus;
+        g = (c - lm->ctrav) / lm->scale;
+    }
+    return g;
+}
+
+typedef struct lin_chunk {
+    double tl, tr, mc; /* state before the run */
+    double lb;         /* no candidate of the run has a smaller g */
+} lin_chunk;
+
+static inline __attribute__((always_inline)) void
+lin_node(sah_build *b, const uint64_t *ev, size_t stride, size_t n, double tsum,
+         const bsp_box *cell, const lin_model *lm, split_choice *best, const int mode,
+         const int mailbox)
+{
+    if (mode == COST_UNIFORM)
+        tsum = (double)n;
+    const size_t m = 2 * n;
+    lin_axis ax[3];
+    size_t nchunks[3] = {0, 0, 0}, total_chunks = 0;
+    for (unsigned k = 0; k < 3; k++) {
+        lin_axis *A = &ax[k];
+        const unsigned j1 = (k + 1) % 3, j2 = (k + 2) % 3;
+        const double d1 = cell->hi.v[j1] - cell->lo.v[j1], d2 = cell->hi.v[j2] - cell->lo.v[j2];
+        A->e = ev + k * stride;
+        A->m = m;
+        A->lo = cell->lo.v[k];
+        A->hi = cell->hi.v[k];
+        A->cross = d1 * d2;
+        A->perim = d1 + d2;
+        /* the events at or below the cell's low end only count */
+        double tl = 0.0, tr = 0.0, mc = (double)n;
+        size_t i = 0, nl = 0;
+        for (; i < m; i++) {
+            uint64_t x = A->e[i];
+            if (ev_pos(x) > A->lo)
+                break;
+            int start = (int)((x >> 31) & 1);
+            double t = ev_t(b, x, mode);
+            nl += (size_t)start;
+            tl += start ? t : 0.0;
+            tr += start ? 0.0 : t; /* subtracted below from the right sum */
+            mc += start ? 1.0 : -1.0;
+        }
+        A->tl0 = tl;
+        A->mc0 = mc;
+        A->tr0 = tsum - tr; /* exact: the sums are exact */
+        size_t z = m;
+        while (z > i && ev_pos(A->e[z - 1]) >= A->hi)
+            z--;
+        A->first_bonus = nl == 0 && i < z;
+        A->last_bonus = z == m && i < z;
+        A->a = i;
+        A->z = z;
+    }
+    double bg = INFINITY;
+    size_t bi[3] = {SIZE_MAX, SIZE_MAX, SIZE_MAX};
+    lin_state first_st[3];
+    for (unsigned k = 0; k < 3; k++) {
+        lin_axis *A = &ax[k];
+        lin_state st = {A->tl0, A->tr0, A->mc0};
+        if (A->first_bonus) {
+            /* evaluated apart: the state moves past it */
+            (void)lin_single(b, A, lm, A->a, &st, 0, 1, mode, mailbox);
+            A->a++;
+        }
+        if (A->last_bonus)
+            A->z--; /* e[m - 1] is an END, the first candidate with nothing left a START */
+        first_st[k] = st;
+        if (A->z > A->a && A->z - A->a >= SWEEP_PRUNE_MIN)
+            nchunks[k] = (A->z - A->a + SWEEP_CHUNK - 1) / SWEEP_CHUNK;
+        total_chunks += nchunks[k];
+    }
+    lin_chunk *ch = NULL;
+    double U = INFINITY;
+    if (total_chunks > 0) {
+        if (!grow_u64((uint64_t **)&b->chunks, &b->chunks_cap,
+                      total_chunks * (sizeof(lin_chunk) / sizeof(uint64_t))))
+            total_chunks = 0, nchunks[0] = nchunks[1] = nchunks[2] = 0; /* no pruning */
+        else
+            ch = (lin_chunk *)b->chunks;
+    }
+    /* pass 1: the sums of each run, and the bound of each; the probe */
+    if (ch) {
+        lin_chunk *c = ch;
+        for (unsigned k = 0; k < 3; k++) {
+            lin_axis *A = &ax[k];
+            if (!nchunks[k])
+                continue;
+            lin_state st = first_st[k];
+            size_t least = 0;
+            double least_lb = INFINITY;
+            for (size_t j = 0; j < nchunks[k]; j++) {
+                size_t from = A->a + j * SWEEP_CHUNK;
+                size_t to = from + SWEEP_CHUNK < A->z ? from + SWEEP_CHUNK : A->z;
+                double ts = 0.0, te = 0.0, ns = 0.0;
+                for (size_t i = from; i < to; i++) {
+                    uint64_t x = A->e[i];
+                    int start = (int)((x >> 31) & 1);
+                    double t = ev_t(b, x, mode);
+                    ts += start ? t : 0.0;
+                    te += start ? 0.0 : t;
+                    ns += start ? 1.0 : 0.0;
+                }
+                double ne = (double)(to - from) - ns;
+                c[j].tl = st.tl;
+                c[j].tr = st.tr;
+                c[j].mc = st.mc;
+                double pf = ev_pos(A->e[from]), pl = ev_pos(A->e[to - 1]);
+                c[j].lb = lin_g(A, lm, pf, pl, st.tl, st.tr - te, st.mc - ne, mode, mailbox);
+                if (c[j].lb < least_lb) {
+                    least_lb = c[j].lb;
+                    least = j;
+                }
+                st.tl += ts;
+                st.tr -= te;
+                st.mc += ns - ne;
+            }
+            /* the probe: the run of least bound, evaluated */
+            size_t from = A->a + least * SWEEP_CHUNK;
+            size_t to = from + SWEEP_CHUNK < A->z ? from + SWEEP_CHUNK : A->z;
+            lin_state ps = {c[least].tl, c[least].tr, c[least].mc};
+            size_t dummy = SIZE_MAX;
+            lin_run(b, A, lm, from, to, &ps, &U, &dummy, mode, mailbox);
+            c += nchunks[k];
+        }
+    }
+    /* pass 2: in order (axis, position), only what can beat the probe */
+    lin_chunk *c = ch;
+    unsigned best_k = 0;
+    for (unsigned k = 0; k < 3; k++) {
+        lin_axis *A = &ax[k];
+        double bg_before = bg;
+        if (A->first_bonus) {
+            lin_state st = {A->tl0, A->tr0, A->mc0};
+            double g = lin_single(b, A, lm, A->a - 1, &st, 0, 1, mode, mailbox);
+            if (g < bg) {
+                bg = g;
+                bi[k] = A->a - 1;
+            }
+        }
+        if (!nchunks[k]) {
+            lin_state st = first_st[k];
+            lin_run(b, A, lm, A->a, A->z, &st, &bg, &bi[k], mode, mailbox);
+        } else {
+            for (size_t j = 0; j < nchunks[k]; j++) {
+                if (!(c[j].lb < bg && c[j].lb <= U))
+                    continue;
+                size_t from = A->a + j * SWEEP_CHUNK;
+                size_t to = from + SWEEP_CHUNK < A->z ? from + SWEEP_CHUNK : A->z;
+                lin_state st = {c[j].tl, c[j].tr, c[j].mc};
+                lin_run(b, A, lm, from, to, &st, &bg, &bi[k], mode, mailbox);
+            }
+            c += nchunks[k];
+        }
+        if (A->last_bonus) {
+            /* the state before e[m - 1]: every START in, every END but its own out */
+            double t = ev_t(b, A->e[m - 1], mode);
+            lin_state st = {tsum, t, mailbox && mode != COST_UNIFORM ? (double)n + 1.0 : 0.0};
+            double g = lin_single(b, A, lm, m - 1, &st, n, 0, mode, mailbox);
+            if (g < bg) {
+                bg = g;
+                bi[k] = m - 1;
+            }
+        }
+        if (bg < bg_before)
+            best_k = k;
+    }
+    if (bg < INFINITY && bi[best_k] != SIZE_MAX) {
+        best->cost = lm->ctrav + lm->scale * bg;
+        best->axis = best_k;
+        best->pos = key_float((uint32_t)(ax[best_k].e[bi[best_k]] >> 32));
+        best->found = 1;
+    }
+}
+
+#define LIN_CASE(MODE)                                                                          \
+    case MODE:                                                                                  \
+        if (b->mailbox)                                                                         \
+            lin_node(b, ev, stride, n, tsum, cell, &lm, best, MODE, 1);                         \
+        else                                                                                    \
+            lin_node(b, ev, stride, n, tsum, cell, &lm, best, MODE, 0);                         \
+        break;
+
+/* The best plane of a node by the fast sweep (surface area, b->linear). */
+static void lin_split(sah_build *b, const uint64_t *ev, size_t stride, size_t n, double tsum,
+                      const bsp_box *cell, double inv_area, split_choice *best)
+{
+    lin_model lm;
+    const double ctr = b->ctrav;
+    lm.ctrav = ctr;
+    lm.bonus = b->bonus_mul;
+    if (b->cost_mode == COST_UNIFORM) {
+        lm.scale = b->unif * inv_area;
+        lm.mbw = b->mb_hit / b->unif;
+        lm.w0 = b->mailbox ? (double)n - lm.mbw * (double)n : 0.0;
+    } else {
+        lm.scale = inv_area;
+        lm.mbw = b->mb_hit;
+        lm.w0 = b->mailbox ? tsum - lm.mbw * (double)n : 0.0;
+    }
+    if (lm.w0 < 0.0)
+        lm.w0 = 0.0;
+    switch (b->cost_mode) {
+        LIN_CASE(COST_UNIFORM)
+        LIN_CASE(COST_CLASS)
+        LIN_CASE(COST_ARRAY)
+    }
+}
+
 /* --- nodes ---------------------------------------------------------------------------------- */
 
 /* A node's event lists: axis k at ev[base + k * stride], 2n events each. */
@@ -549,9 +891,13 @@ static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     /* 1. the best plane: one sweep per axis */
     split_choice best = {INFINITY, 0, 0.0f, 0};
     double inv_area = (surface ? 2.0 : 1.0) / area; /* the sweep uses half areas */
-    for (unsigned k = 0; k < 3; k++) {
-        const uint64_t *e = b->ev + L.base + k * L.stride;
-        sweep(b, e, m, k, &cell, inv_area, tsum, n, surface, &best);
+    if (surface && b->linear) {
+        lin_split(b, b->ev + L.base, L.stride, n, tsum, &cell, inv_area, &best);
+    } else {
+        for (unsigned k = 0; k < 3; k++) {
+            const uint64_t *e = b->ev + L.base + k * L.stride;
+            sweep(b, e, m, k, &cell, inv_area, tsum, n, surface, &best);
+        }
     }
     if (!best.found)
         return make_leaf(b, node, b->ev + L.base, n);
@@ -714,6 +1060,26 @@ static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     return put_leaf(t, node, b->list, c) ? BSP_OK : oom(b);
 }
 
+/* Rounds the costs C[0..N) to multiples of one power of two q, the smallest
+ * with sum C < 2^52 q: then every sum of costs the builder forms (a node's,
+ * in any order) is exact, which the fast sweep's bounds rely on. The change
+ * is below 2^-52 of the total. */
+static void quantize_costs(double *c, size_t n)
+{
+    double tot = 0.0;
+    for (size_t i = 0; i < n; i++)
+        tot += c[i];
+    if (!(tot > 0.0) || !isfinite(tot))
+        return;
+    double q = ldexp(1.0, ilogb(tot) + 2 - 52); /* + 2: room for the rounding of tot */
+    for (size_t i = 0; i < n; i++) {
+        if (c[i] > 0.0) {
+            double r = nearbyint(c[i] / q) * q;
+            c[i] = r > 0.0 ? r : q;
+        }
+    }
+}
+
 /* --- entry points ------------------------------------------------------------------------------ */
 
 void kd_sah_default_limits(bsp_build_options *o, const bsp_scene *scene)
@@ -783,8 +1149,9 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
             goto done;
         }
         for (uint32_t p = 0; p < np; p++)
-            b.cost[p] = scene->prims[p].shape == SHAPE_NONE ? 0.0f
-                                                           : (float)kd_prim_cost(scene, p, &cm.c);
+            b.cost[p] = scene->prims[p].shape == SHAPE_NONE ? 0.0
+                                                           : kd_prim_cost(scene, p, &cm.c);
+        quantize_costs(b.cost, np);
         /* at most 8 distinct costs: classes in the events */
         int ncls = 0;
         b.pclass = malloc(np);
@@ -829,10 +1196,14 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
         }
         radix_sort(e, b.ev + 3 * m, m);
     }
-    double tsum = 0.0, cost;
+    double tsum = 0.0, cost, tmin = INFINITY;
     for (uint32_t p = 0; p < np; p++)
-        if (scene->prims[p].shape != SHAPE_NONE)
-            tsum += b.cost ? (double)b.cost[p] : b.unif;
+        if (scene->prims[p].shape != SHAPE_NONE) {
+            double tp = b.cost ? b.cost[p] : b.unif;
+            tsum += tp;
+            tmin = tp < tmin ? tp : tmin;
+        }
+    b.linear = !b.mailbox || tmin >= b.mb_hit;
     node_lists root = {0, m, n, tsum};
     st = build_node(&b, 0, t->box, root, 3 * m, 0, 0, b.surface, &cost);
 done:
@@ -843,6 +1214,7 @@ done:
     free(b.nev[1]);
     free(b.list);
     free(b.pclass);
+    free(b.chunks);
     kd_clip_scratch_free(&b.clip);
     return st;
 }
