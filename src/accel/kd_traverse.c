@@ -16,56 +16,80 @@
  * the naive method computes. The loop stops once the best hit lies inside
  * the current cell (t <= exit t); at equal t the lower index wins, as in the
  * naive method. The padded assignment (kd_tree.h) makes this exact.
+ *
+ * Speed (primary rays spend most of their time here, not in the shape
+ * tests): the descent is one inlined loop over node pointers with the stack
+ * addressed by pointers; the shape kernels (geom/isect.h) are inlined into
+ * the leaf loop and see dot(dir, dir) computed once per ray; a hit keeps only
+ * t and, for triangles, the unnormalised barycentrics, and u, v are divided
+ * out once for the final hit. Counters are kept in locals and derived where
+ * possible (mailbox hits = entries met - tests, empty leaves = leaves -
+ * non-empty leaves).
  */
 #include <math.h>
 
 #include "accel/kd_tree.h"
 #include "geom/vec.h"
 
-#define NO_NODE UINT32_MAX
 /* entry + exit + one push per level, with room to spare */
 #define KD_STACK_SIZE (BSP_KD_MAX_DEPTH_LIMIT + 4)
 
 typedef struct stack_entry {
-    uint32_t node; /* the far child to visit after this point, or NO_NODE */
-    int prev;      /* the previous exit point */
-    double t;      /* ray parameter of the point */
-    bsp_vec3 pb;   /* the point */
+    double pb[3];             /* the point */
+    double t;                 /* ray parameter of the point */
+    const kd_node *node;      /* the far child to visit after this point, or NULL */
+    struct stack_entry *prev; /* the previous exit point */
 } stack_entry;
 
-/* Clips RAY's [tmin, tmax] to BOX; 0 when they do not meet. Zero direction
- * components are handled by the origin test alone. */
-static int clip_to_box(const bsp_box *box, const bsp_ray *ray, double *t0, double *t1)
+/* Clips the interval [*A, *B] to the slab LO <= o + t d <= HI; 0 when the
+ * ray is parallel to the slab and outside it. */
+static inline int clip_slab(double o, double d, double lo, double hi, double *a, double *b)
 {
-    double a = ray->tmin, b = ray->tmax;
-    for (int k = 0; k < 3; k++) {
-        double o = ray->org.v[k], d = ray->dir.v[k];
-        if (d == 0.0) {
-            if (o < box->lo.v[k] || o > box->hi.v[k])
-                return 0;
-            continue;
-        }
-        double inv = 1.0 / d;
-        double ta = (box->lo.v[k] - o) * inv, tb = (box->hi.v[k] - o) * inv;
-        if (ta > tb) {
-            double x = ta;
-            ta = tb;
-            tb = x;
-        }
-        if (ta > a)
-            a = ta;
-        if (tb < b)
-            b = tb;
+    if (d == 0.0)
+        return !(o < lo || o > hi);
+    double inv = 1.0 / d;
+    double ta = (lo - o) * inv, tb = (hi - o) * inv;
+    if (ta > tb) {
+        double x = ta;
+        ta = tb;
+        tb = x;
     }
-    if (!(a <= b))
+    if (ta > *a)
+        *a = ta;
+    if (tb < *b)
+        *b = tb;
+    return 1;
+}
+
+/* Sets up the entry and exit points of RAY's segment inside the root box
+ * (STACK[0], STACK[1]); returns 0 when they do not meet. Zero direction
+ * components are handled by the origin test alone. */
+static inline int start(const kd_tree *t, const bsp_ray *ray, stack_entry *stack)
+{
+    const bsp_box *box = &t->box;
+    const bsp_vec3 o = ray->org, d = ray->dir;
+    double a = ray->tmin, b = ray->tmax;
+    if (box_is_empty(*box) || !clip_slab(o.x, d.x, box->lo.x, box->hi.x, &a, &b) ||
+        !clip_slab(o.y, d.y, box->lo.y, box->hi.y, &a, &b) ||
+        !clip_slab(o.z, d.z, box->lo.z, box->hi.z, &a, &b) || !(a <= b))
         return 0;
-    *t0 = a;
-    *t1 = b;
+    stack[0].pb[0] = o.x + d.x * a;
+    stack[0].pb[1] = o.y + d.y * a;
+    stack[0].pb[2] = o.z + d.z * a;
+    stack[0].t = a;
+    stack[0].node = NULL;
+    stack[0].prev = stack;
+    stack[1].pb[0] = o.x + d.x * b;
+    stack[1].pb[1] = o.y + d.y * b;
+    stack[1].pb[2] = o.z + d.z * b;
+    stack[1].t = b;
+    stack[1].node = NULL;
+    stack[1].prev = stack;
     return 1;
 }
 
 /* Starts a new ray in the mailbox: returns its stamp. */
-static uint32_t mailbox_next(bsp_query *q, size_t nprims)
+static inline uint32_t mailbox_next(bsp_query *q, size_t nprims)
 {
     if (!q->stamp)
         return 0;
@@ -77,35 +101,35 @@ static uint32_t mailbox_next(bsp_query *q, size_t nprims)
     return q->ray_id;
 }
 
-/* Descends from CURR to a leaf, pushing far children; returns the leaf. */
-static uint32_t descend(const kd_tree *t, const bsp_ray *ray, stack_entry *stack, int en,
-                        int *ex_io, uint32_t curr, uint64_t *steps)
+/* Descends from N to a leaf between the entry point EN and the exit point
+ * *EX, pushing the far children and counting interior nodes in *STEPS;
+ * returns the leaf. */
+static inline __attribute__((always_inline)) const kd_node *
+descend(const kd_node *nodes, const kd_node *n, const bsp_ray *ray, const stack_entry *en,
+        stack_entry **ex_io, uint64_t *steps)
 {
-    int ex = *ex_io;
-    const kd_node *n = &t->nodes[curr];
-    while (!kd_is_leaf(n)) {
-        (*steps)++;
-        unsigned axis = kd_axis(n);
+    stack_entry *ex = *ex_io;
+    uint32_t bits;
+    while (((bits = n->bits) & 3u) != KD_LEAF_TAG) {
+        ++*steps;
+        unsigned axis = bits & 3u;
         double s = (double)n->u.split;
-        double A = stack[en].pb.v[axis], B = stack[ex].pb.v[axis];
-        uint32_t left = kd_child(n), near_c, far_c;
+        double A = en->pb[axis], B = ex->pb[axis];
+        const kd_node *left = nodes + (bits >> 2), *near_c, *far_c;
         if (A <= s) {
             if (B <= s) { /* N1, N2, N3, P5, Z2, Z3: the left side only */
-                curr = left;
-                n = &t->nodes[curr];
+                n = left;
                 continue;
             }
             if (A == s) { /* Z1: starts on the plane, goes right */
-                curr = left + 1;
-                n = &t->nodes[curr];
+                n = left + 1;
                 continue;
             }
             near_c = left; /* N4 */
             far_c = left + 1;
         } else {
             if (B > s) { /* P1, P2, P3, N5: the right side only */
-                curr = left + 1;
-                n = &t->nodes[curr];
+                n = left + 1;
                 continue;
             }
             near_c = left + 1; /* P4 */
@@ -113,37 +137,32 @@ static uint32_t descend(const kd_tree *t, const bsp_ray *ray, stack_entry *stack
         }
         /* A and B lie strictly on opposite sides: d[axis] != 0 */
         double tp = (s - ray->org.v[axis]) / ray->dir.v[axis];
-        int tmp = ex++;
+        stack_entry *prev = ex++;
         if (ex == en)
             ex++;
-        stack_entry *e = &stack[ex];
-        e->prev = tmp;
-        e->t = tp;
-        e->node = far_c;
-        e->pb = ray_at(ray, tp);
-        e->pb.v[axis] = s;
-        curr = near_c;
-        n = &t->nodes[curr];
+        ex->prev = prev;
+        ex->t = tp;
+        ex->node = far_c;
+        ex->pb[0] = ray->org.x + ray->dir.x * tp;
+        ex->pb[1] = ray->org.y + ray->dir.y * tp;
+        ex->pb[2] = ray->org.z + ray->dir.z * tp;
+        ex->pb[axis] = s;
+        n = near_c;
     }
     *ex_io = ex;
-    return curr;
+    return n;
 }
 
-/* Sets up the stack for RAY; returns 0 when it misses the root box. */
-static int start(const kd_tree *t, const bsp_ray *ray, stack_entry *stack)
+/* Adds one query's counts to Q. REFS: leaf entries met (tested or skipped by
+ * the mailbox). */
+static inline void count(bsp_query *q, uint64_t interior, uint64_t leaves, uint64_t nonempty,
+                         uint64_t refs, uint64_t tests)
 {
-    double ta, tb;
-    if (box_is_empty(t->box) || !clip_to_box(&t->box, ray, &ta, &tb))
-        return 0;
-    stack[0].t = ta;
-    stack[0].pb = ray_at(ray, ta);
-    stack[0].node = NO_NODE;
-    stack[0].prev = 0;
-    stack[1].t = tb;
-    stack[1].pb = ray_at(ray, tb);
-    stack[1].node = NO_NODE;
-    stack[1].prev = 0;
-    return 1;
+    q->counters.traversal_steps += interior + leaves;
+    q->counters.isect_tests += tests;
+    q->counters.leaves_visited += leaves;
+    q->counters.empty_leaves += leaves - nonempty;
+    q->counters.mailbox_hits += refs - tests;
 }
 
 int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit)
@@ -156,48 +175,54 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
         return 0;
     uint32_t stamp = mailbox_next(q, s->nprims);
     uint32_t *mbox = q->stamp;
-    bsp_ray r = *ray; /* r.tmax follows the best hit; t never depends on it */
-    int found = 0, en = 0, ex = 1;
-    uint64_t steps = 0, tests = 0, leaves = 0, empty = 0, mb_hits = 0;
-    uint32_t curr = 0;
-    while (curr != NO_NODE) {
-        curr = descend(t, ray, stack, en, &ex, curr, &steps);
-        const kd_node *leaf = &t->nodes[curr];
-        uint32_t cnt = kd_count(leaf);
-        const uint32_t *list = t->prims + leaf->u.first;
-        steps++;
+    /* tmax follows the best hit; t never depends on it. Every hit found is at
+     * most tmax, so a hit is better than the best so far when its t is
+     * smaller or, at equal t, its index is lower. */
+    isect_ray r;
+    isect_ray_init(&r, ray);
+    double tmax = ray->tmax;
+    scene_isect_hit best = {INFINITY, 0.0, 0.0, 1.0}, h;
+    uint32_t best_p = BSP_NO_PRIM;
+    uint64_t interior = 0, leaves = 0, nonempty = 0, refs = 0, tests = 0;
+    const kd_node *nodes = t->nodes, *n = nodes;
+    const uint32_t *prims = t->prims;
+    stack_entry *en = stack, *ex = stack + 1;
+    for (;;) {
+        n = descend(nodes, n, ray, en, &ex, &interior);
+        uint32_t cnt = n->bits >> 2;
         leaves++;
-        empty += cnt == 0;
-        for (uint32_t k = 0; k < cnt; k++) {
-            uint32_t p = list[k];
-            if (mbox) {
-                if (mbox[p] == stamp) {
-                    mb_hits++;
-                    continue;
+        if (cnt) {
+            const uint32_t *list = prims + n->u.first, *end = list + cnt;
+            nonempty++;
+            refs += cnt;
+            do {
+                uint32_t p = *list++;
+                if (mbox) {
+                    if (mbox[p] == stamp)
+                        continue;
+                    mbox[p] = stamp;
                 }
-                mbox[p] = stamp;
-            }
-            tests++;
-            bsp_hit h;
-            if (scene_intersect(s, p, &r, &h) &&
-                (!found || h.t < hit->t || (h.t == hit->t && p < hit->prim))) {
-                *hit = h;
-                r.tmax = h.t;
-                found = 1;
-            }
+                tests++;
+                if (scene_isect(s, p, &r, tmax, &h) && (h.t < best.t || p < best_p)) {
+                    best = h;
+                    best_p = p;
+                    tmax = h.t;
+                }
+            } while (list != end);
         }
-        if (found && hit->t <= stack[ex].t)
+        if (best_p != BSP_NO_PRIM && best.t <= ex->t)
             break; /* the closest hit lies inside this cell */
         en = ex;
-        curr = stack[ex].node;
-        ex = stack[en].prev;
+        n = ex->node;
+        if (!n)
+            break;
+        ex = en->prev;
     }
-    q->counters.traversal_steps += steps;
-    q->counters.isect_tests += tests;
-    q->counters.leaves_visited += leaves;
-    q->counters.empty_leaves += empty;
-    q->counters.mailbox_hits += mb_hits;
-    return found;
+    count(q, interior, leaves, nonempty, refs, tests);
+    if (best_p == BSP_NO_PRIM)
+        return 0;
+    scene_hit_finish(&best, best_p, hit);
+    return 1;
 }
 
 int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
@@ -209,41 +234,45 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
         return 0;
     uint32_t stamp = mailbox_next(q, s->nprims);
     uint32_t *mbox = q->stamp;
-    int found = 0, en = 0, ex = 1;
-    uint64_t steps = 0, tests = 0, leaves = 0, empty = 0, mb_hits = 0;
-    uint32_t curr = 0;
-    while (curr != NO_NODE && !found) {
-        curr = descend(t, ray, stack, en, &ex, curr, &steps);
-        const kd_node *leaf = &t->nodes[curr];
-        uint32_t cnt = kd_count(leaf);
-        const uint32_t *list = t->prims + leaf->u.first;
-        steps++;
+    isect_ray r;
+    isect_ray_init(&r, ray);
+    const double tmax = ray->tmax;
+    scene_isect_hit h;
+    int found = 0;
+    uint64_t interior = 0, leaves = 0, nonempty = 0, refs = 0, tests = 0;
+    const kd_node *nodes = t->nodes, *n = nodes;
+    const uint32_t *prims = t->prims;
+    stack_entry *en = stack, *ex = stack + 1;
+    for (;;) {
+        n = descend(nodes, n, ray, en, &ex, &interior);
+        uint32_t cnt = n->bits >> 2;
         leaves++;
-        empty += cnt == 0;
-        for (uint32_t k = 0; k < cnt; k++) {
-            uint32_t p = list[k];
-            if (mbox) {
-                if (mbox[p] == stamp) {
-                    mb_hits++;
-                    continue;
+        if (cnt) {
+            const uint32_t *list = prims + n->u.first, *end = list + cnt;
+            nonempty++;
+            do {
+                uint32_t p = *list++;
+                refs++;
+                if (mbox) {
+                    if (mbox[p] == stamp)
+                        continue;
+                    mbox[p] = stamp;
                 }
-                mbox[p] = stamp;
-            }
-            tests++;
-            bsp_hit h;
-            if (scene_intersect(s, p, ray, &h)) {
-                found = 1;
+                tests++;
+                if (scene_isect(s, p, &r, tmax, &h)) {
+                    found = 1;
+                    break;
+                }
+            } while (list != end);
+            if (found)
                 break;
-            }
         }
         en = ex;
-        curr = stack[ex].node;
-        ex = stack[en].prev;
+        n = ex->node;
+        if (!n)
+            break;
+        ex = en->prev;
     }
-    q->counters.traversal_steps += steps;
-    q->counters.isect_tests += tests;
-    q->counters.leaves_visited += leaves;
-    q->counters.empty_leaves += empty;
-    q->counters.mailbox_hits += mb_hits;
+    count(q, interior, leaves, nonempty, refs, tests);
     return found;
 }

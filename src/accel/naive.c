@@ -5,39 +5,48 @@
  * Ties: a primitive replaces the current closest hit only when its t is
  * strictly smaller, so at equal t the lowest index wins.
  */
+#include <math.h>
+
 #include "accel/accel_internal.h"
 
 static int naive_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit)
 {
     const bsp_scene *s = a->scene;
-    bsp_ray r = *ray; /* r.tmax shrinks to the closest hit so far; t never depends on it */
-    bsp_hit h;
-    int found = 0;
+    isect_ray r;
+    isect_ray_init(&r, ray);
+    double tmax = ray->tmax; /* shrinks to the closest hit so far; t never depends on it */
+    scene_isect_hit best = {INFINITY, 0.0, 0.0, 1.0}, h;
+    uint32_t best_p = BSP_NO_PRIM;
     hit->prim = BSP_NO_PRIM;
     uint64_t tests = 0;
     for (uint32_t i = 0; i < (uint32_t)s->nprims; i++) {
         if (s->prims[i].shape == SHAPE_NONE)
             continue;
         tests++;
-        if (scene_intersect(s, i, &r, &h) && (!found || h.t < hit->t)) {
-            *hit = h;
-            r.tmax = h.t;
-            found = 1;
+        if (scene_isect(s, i, &r, tmax, &h) && (best_p == BSP_NO_PRIM || h.t < best.t)) {
+            best = h;
+            best_p = i;
+            tmax = h.t;
         }
     }
     q->counters.isect_tests += tests;
-    return found;
+    if (best_p == BSP_NO_PRIM)
+        return 0;
+    scene_hit_finish(&best, best_p, hit);
+    return 1;
 }
 
 static int naive_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
 {
     const bsp_scene *s = a->scene;
-    bsp_hit h;
+    isect_ray r;
+    isect_ray_init(&r, ray);
+    scene_isect_hit h;
     for (uint32_t i = 0; i < (uint32_t)s->nprims; i++) {
         if (s->prims[i].shape == SHAPE_NONE)
             continue;
         q->counters.isect_tests++;
-        if (scene_intersect(s, i, ray, &h))
+        if (scene_isect(s, i, &r, ray->tmax, &h))
             return 1;
     }
     return 0;

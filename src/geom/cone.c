@@ -14,6 +14,7 @@
  */
 #include <math.h>
 
+#include "geom/isect.h"
 #include "geom/shapes.h"
 #include "geom/vec.h"
 
@@ -60,54 +61,11 @@ bsp_box cone_bounds(const cone_shape *c)
                      disc_bounds(apex, c->apex_radius, c->axis));
 }
 
-static int valid_root(const cone_shape *c, const bsp_ray *ray, double h0, double hd, double t)
-{
-    double h = h0 + t * hd;
-    return h >= 0.0 && h <= c->length && c->base_radius + c->slope * h >= 0.0 &&
-           t >= ray->tmin && t <= ray->tmax;
-}
-
 int cone_intersect(const cone_shape *c, const bsp_ray *ray, double *t)
 {
-    bsp_vec3 oc = v3_sub(ray->org, c->base);
-    double h0 = v3_dot(oc, c->axis), hd = v3_dot(ray->dir, c->axis);
-    bsp_vec3 po = v3_madd(oc, c->axis, -h0);
-    bsp_vec3 pd = v3_madd(ray->dir, c->axis, -hd);
-    double ro = c->base_radius + c->slope * h0, rd = c->slope * hd;
-    double qa = v3_dot(pd, pd) - rd * rd;
-    double qb = v3_dot(po, pd) - ro * rd;
-    double qc = v3_dot(po, po) - ro * ro;
-
-    double t0, t1;
-    if (qa == 0.0) {
-        if (qb == 0.0)
-            return 0;
-        t0 = t1 = -qc / (2.0 * qb);
-    } else {
-        double disc = qb * qb - qa * qc;
-        if (!(disc >= 0.0))
-            return 0;
-        double q = -(qb + copysign(sqrt(disc), qb));
-        t0 = t1 = 0.0; /* q == 0: qb == 0 and qc == 0, a double root at 0 */
-        if (q != 0.0) {
-            t0 = q / qa;
-            t1 = qc / q;
-        }
-        if (t0 > t1) {
-            double tmp = t0;
-            t0 = t1;
-            t1 = tmp;
-        }
-    }
-    if (valid_root(c, ray, h0, hd, t0)) {
-        *t = t0;
-        return 1;
-    }
-    if (valid_root(c, ray, h0, hd, t1)) {
-        *t = t1;
-        return 1;
-    }
-    return 0;
+    isect_ray r;
+    isect_ray_init(&r, ray);
+    return cone_isect(c, &r, ray->tmax, t);
 }
 
 /* The gradient of |p| - r(h): the radial direction tilted by -slope along the

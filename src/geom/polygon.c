@@ -15,6 +15,7 @@
  */
 #include <math.h>
 
+#include "geom/isect.h"
 #include "geom/shapes.h"
 #include "geom/vec.h"
 
@@ -74,40 +75,11 @@ bsp_box polygon_bounds(const polygon_shape *p, const bsp_vec3 *verts)
     return box;
 }
 
-/* Even-odd test of (px, py) against the polygon projected on axes (au, av). */
-static int contains_2d(const bsp_vec3 *vs, uint32_t count, int au, int av, double px, double py)
-{
-    int inside = 0;
-    bsp_vec3 prev = vs[count - 1];
-    for (uint32_t i = 0; i < count; i++) {
-        bsp_vec3 cur = vs[i];
-        if ((cur.v[av] > py) != (prev.v[av] > py)) {
-            const bsp_vec3 *lo = cur.v[av] < prev.v[av] ? &cur : &prev;
-            const bsp_vec3 *hi = lo == &cur ? &prev : &cur;
-            double x = lo->v[au] + (py - lo->v[av]) * (hi->v[au] - lo->v[au]) /
-                                       (hi->v[av] - lo->v[av]);
-            if (px < x)
-                inside ^= 1;
-        }
-        prev = cur;
-    }
-    return inside;
-}
-
 int polygon_intersect(const polygon_shape *p, const bsp_vec3 *verts, const bsp_ray *ray, double *t)
 {
-    double denom = v3_dot(p->normal, ray->dir);
-    if (denom == 0.0)
-        return 0;
-    double tt = (p->d - v3_dot(p->normal, ray->org)) / denom;
-    if (!(tt >= ray->tmin && tt <= ray->tmax))
-        return 0;
-    bsp_vec3 hit = ray_at(ray, tt);
-    if (!contains_2d(verts + p->first, p->count, p->axis_u, p->axis_v, hit.v[p->axis_u],
-                     hit.v[p->axis_v]))
-        return 0;
-    *t = tt;
-    return 1;
+    isect_ray r;
+    isect_ray_init(&r, ray);
+    return polygon_isect(p, verts, &r, ray->tmax, t);
 }
 
 /* The normalised pool normal, or FALLBACK when it has no direction. */

@@ -2,6 +2,10 @@
  * shapes.h — the four intersectable shapes: their precomputed records, setup
  * (validation + precomputation), exact bounds, ray intersection and normals.
  *
+ * The *_intersect functions are out-of-line wrappers of the inline kernels in
+ * geom/isect.h, which the intersection loops of every method use directly;
+ * both compute the same t, bit for bit.
+ *
  * Contract shared by every *_intersect:
  *   - returns 1 and writes *t when the shape is hit at some t with
  *     ray->tmin <= t <= ray->tmax; returns 0 otherwise;

@@ -11,6 +11,7 @@
  */
 #include <math.h>
 
+#include "geom/isect.h"
 #include "geom/shapes.h"
 #include "geom/vec.h"
 
@@ -37,45 +38,11 @@ bsp_box sphere_bounds(const sphere_shape *s)
     return b;
 }
 
-static int in_interval(const bsp_ray *ray, double t)
-{
-    return t >= ray->tmin && t <= ray->tmax;
-}
-
 int sphere_intersect(const sphere_shape *s, const bsp_ray *ray, double *t)
 {
-    bsp_vec3 d = ray->dir;
-    double a = v3_dot(d, d);
-    if (!(a > 0.0))
-        return 0;
-    bsp_vec3 oc = v3_sub(ray->org, s->center);
-    double b = v3_dot(oc, d);
-    double c = v3_dot(oc, oc) - s->radius2;
-    bsp_vec3 l = v3_madd(oc, d, -(b / a));
-    double disc = a * (s->radius2 - v3_dot(l, l));
-    if (!(disc >= 0.0))
-        return 0;
-
-    double q = -(b + copysign(sqrt(disc), b));
-    double t0 = 0.0, t1 = 0.0; /* q == 0: b == 0 and c == 0, a double root at 0 */
-    if (q != 0.0) {
-        t0 = q / a;
-        t1 = c / q;
-    }
-    if (t0 > t1) {
-        double tmp = t0;
-        t0 = t1;
-        t1 = tmp;
-    }
-    if (in_interval(ray, t0)) {
-        *t = t0;
-        return 1;
-    }
-    if (in_interval(ray, t1)) {
-        *t = t1;
-        return 1;
-    }
-    return 0;
+    isect_ray r;
+    isect_ray_init(&r, ray);
+    return sphere_isect(s, &r, ray->tmax, t);
 }
 
 bsp_vec3 sphere_normal(const sphere_shape *s, bsp_vec3 p)

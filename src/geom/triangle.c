@@ -11,6 +11,7 @@
  */
 #include <math.h>
 
+#include "geom/isect.h"
 #include "geom/shapes.h"
 #include "geom/vec.h"
 
@@ -64,29 +65,12 @@ bsp_box triangle_bounds(const triangle_shape *tr)
 int triangle_intersect(const triangle_shape *tr, const bsp_ray *ray, double *t, double *u,
                        double *v)
 {
-    bsp_vec3 pvec = v3_cross(ray->dir, tr->e2);
-    double det = v3_dot(tr->e1, pvec);
-    if (det == 0.0)
+    isect_ray r;
+    isect_ray_init(&r, ray);
+    double bu, bv, det;
+    if (!triangle_isect(tr, &r, ray->tmax, t, &bu, &bv, &det))
         return 0;
-    bsp_vec3 tvec = v3_sub(ray->org, tr->v0);
-    bsp_vec3 qvec = v3_cross(tvec, tr->e1);
-    double bu = v3_dot(tvec, pvec);
-    double bv = v3_dot(ray->dir, qvec);
-    double bt = v3_dot(tr->e2, qvec);
-    if (det < 0.0) {
-        det = -det;
-        bu = -bu;
-        bv = -bv;
-        bt = -bt;
-    }
-    if (!(bu >= 0.0 && bv >= 0.0 && bu + bv <= det))
-        return 0;
-    double tt = bt / det;
-    if (!(tt >= ray->tmin && tt <= ray->tmax))
-        return 0;
-    *t = tt;
-    *u = bu / det;
-    *v = bv / det;
+    triangle_uv(bu, bv, det, u, v);
     return 1;
 }
 

@@ -19,6 +19,7 @@
 #include "bspray/error.h"
 #include "bspray/geom.h"
 #include "bspray/scene.h"
+#include "geom/isect.h"
 #include "geom/shapes.h"
 
 #define HIDDEN __attribute__((visibility("hidden")))
@@ -130,34 +131,65 @@ HIDDEN bsp_status nff_load_file(const char *path, bsp_scene **out, bsp_error *er
 HIDDEN bsp_status obj_load_file(const char *path, bsp_scene **out, bsp_error *err);
 HIDDEN bsp_status ply_load_file(const char *path, bsp_scene **out, bsp_error *err);
 
-/* Intersection dispatch used by every accelerator (inline for speed): the t
- * computed never depends on ray->tmin / ray->tmax, which only filter. */
+/* A hit of one primitive as the intersection loops keep it: t, and for
+ * triangles the unnormalised barycentrics and determinant (u = bu / det,
+ * v = bv / det, divided out once for the final hit by scene_hit_finish);
+ * other shapes have bu = bv = 0, det = 1. */
+typedef struct scene_isect_hit {
+    double t, bu, bv, det;
+} scene_isect_hit;
+
+/* Intersection dispatch used by every accelerator (inline, with the kernels
+ * of geom/isect.h): the t computed never depends on ray->tmin / TMAX,
+ * which only filter. Writes *H only on a hit. */
+static inline __attribute__((always_inline)) int
+scene_isect(const bsp_scene *s, uint32_t prim, const isect_ray *ray, double tmax,
+            scene_isect_hit *h)
+{
+    const prim_record *p = &s->prims[prim];
+    switch ((shape_kind)p->shape) {
+    case SHAPE_SPHERE:
+        if (!sphere_isect(&s->spheres[p->slot], ray, tmax, &h->t))
+            return 0;
+        break;
+    case SHAPE_TRIANGLE:
+        return triangle_isect(&s->triangles[p->slot], ray, tmax, &h->t, &h->bu, &h->bv, &h->det);
+    case SHAPE_POLYGON:
+        if (!polygon_isect(&s->polygons[p->slot], s->verts, ray, tmax, &h->t))
+            return 0;
+        break;
+    case SHAPE_CONE:
+        if (!cone_isect(&s->cones[p->slot], ray, tmax, &h->t))
+            return 0;
+        break;
+    default:
+        return 0;
+    }
+    h->bu = 0.0;
+    h->bv = 0.0;
+    h->det = 1.0;
+    return 1;
+}
+
+/* The public hit record of H on primitive PRIM. */
+static inline void scene_hit_finish(const scene_isect_hit *h, uint32_t prim, bsp_hit *hit)
+{
+    hit->t = h->t;
+    hit->prim = prim;
+    triangle_uv(h->bu, h->bv, h->det, &hit->u, &hit->v); /* 0 / 1 = 0 for the others */
+}
+
+/* One primitive against a public ray (bsp_scene_intersect_prim, tools). */
 static inline int scene_intersect(const bsp_scene *s, uint32_t prim, const bsp_ray *ray,
                                   bsp_hit *hit)
 {
-    const prim_record *p = &s->prims[prim];
-    int ok = 0;
-    hit->u = 0.0;
-    hit->v = 0.0;
-    switch ((shape_kind)p->shape) {
-    case SHAPE_SPHERE:
-        ok = sphere_intersect(&s->spheres[p->slot], ray, &hit->t);
-        break;
-    case SHAPE_TRIANGLE:
-        ok = triangle_intersect(&s->triangles[p->slot], ray, &hit->t, &hit->u, &hit->v);
-        break;
-    case SHAPE_POLYGON:
-        ok = polygon_intersect(&s->polygons[p->slot], s->verts, ray, &hit->t);
-        break;
-    case SHAPE_CONE:
-        ok = cone_intersect(&s->cones[p->slot], ray, &hit->t);
-        break;
-    case SHAPE_NONE:
-        break;
-    }
-    if (ok)
-        hit->prim = prim;
-    return ok;
+    isect_ray r;
+    isect_ray_init(&r, ray);
+    scene_isect_hit h;
+    if (!scene_isect(s, prim, &r, ray->tmax, &h))
+        return 0;
+    scene_hit_finish(&h, prim, hit);
+    return 1;
 }
 
 #endif /* BSPRAY_SCENE_INTERNAL_H */

@@ -1,0 +1,215 @@
+/*
+ * isect.h — the ray–shape intersection kernels, static inline so that the
+ * intersection loops of every method (naive, kd-tree leaves) inline them.
+ * The out-of-line *_intersect functions of shapes.h are thin wrappers.
+ *
+ * A kernel sees the ray as an isect_ray: origin, direction, dot(dir, dir)
+ * (computed once per ray: the same expression, so the same bits, as a
+ * per-test computation would give) and the interval. It writes *t only on a
+ * hit, and computes t without reference to tmin/tmax (they only filter), so
+ * every caller, whatever its interval, gets the same t bit for bit. The
+ * contract of shapes.h holds for each kernel.
+ */
+#ifndef BSPRAY_GEOM_ISECT_H
+#define BSPRAY_GEOM_ISECT_H
+
+#include <math.h>
+
+#include "geom/shapes.h"
+#include "geom/vec.h"
+
+/* The kernels are small enough to inline into every loop that calls them. */
+#define ISECT_INLINE static inline __attribute__((always_inline))
+
+/* The ray as the kernels see it; the upper end of the interval is a separate
+ * argument TMAX, since the closest-hit loops lower it to the best hit. */
+typedef struct isect_ray {
+    bsp_vec3 org, dir;
+    double dd;   /* dot(dir, dir) */
+    double tmin; /* accepted t: tmin <= t <= tmax (closed) */
+} isect_ray;
+
+static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray)
+{
+    r->org = ray->org;
+    r->dir = ray->dir;
+    r->dd = v3_dot(ray->dir, ray->dir);
+    r->tmin = ray->tmin;
+}
+
+/* --- sphere (see sphere.c for the numerics) ------------------------------ */
+
+ISECT_INLINE int sphere_isect(const sphere_shape *s, const isect_ray *ray, double tmax, double *t)
+{
+    double a = ray->dd;
+    if (!(a > 0.0))
+        return 0;
+    bsp_vec3 d = ray->dir;
+    bsp_vec3 oc = v3_sub(ray->org, s->center);
+    double b = v3_dot(oc, d);
+    bsp_vec3 l = v3_madd(oc, d, -(b / a));
+    double disc = a * (s->radius2 - v3_dot(l, l));
+    if (!(disc >= 0.0))
+        return 0;
+    double c = v3_dot(oc, oc) - s->radius2;
+
+    double q = -(b + copysign(sqrt(disc), b));
+    double t0 = 0.0, t1 = 0.0; /* q == 0: b == 0 and c == 0, a double root at 0 */
+    if (q != 0.0) {
+        t0 = q / a;
+        t1 = c / q;
+    }
+    if (t0 > t1) {
+        double tmp = t0;
+        t0 = t1;
+        t1 = tmp;
+    }
+    if (t0 >= ray->tmin && t0 <= tmax) {
+        *t = t0;
+        return 1;
+    }
+    if (t1 >= ray->tmin && t1 <= tmax) {
+        *t = t1;
+        return 1;
+    }
+    return 0;
+}
+
+/* --- triangle (Möller–Trumbore; see triangle.c) --------------------------- */
+
+/* On a hit also writes the unnormalised barycentrics and the (positive)
+ * determinant: u = *bu / *det, v = *bv / *det, computed only for the final
+ * hit by triangle_uv. */
+ISECT_INLINE int triangle_isect(const triangle_shape *tr, const isect_ray *ray, double tmax,
+                                double *t, double *bu_out, double *bv_out, double *det_out)
+{
+    bsp_vec3 pvec = v3_cross(ray->dir, tr->e2);
+    double det = v3_dot(tr->e1, pvec);
+    if (det == 0.0)
+        return 0;
+    bsp_vec3 tvec = v3_sub(ray->org, tr->v0);
+    double bu = v3_dot(tvec, pvec);
+    /* det's sign decides the orientation; test u early (no qvec needed) */
+    if (det < 0.0 ? !(bu <= 0.0 && bu >= det) : !(bu >= 0.0 && bu <= det))
+        return 0;
+    bsp_vec3 qvec = v3_cross(tvec, tr->e1);
+    double bv = v3_dot(ray->dir, qvec);
+    double bt = v3_dot(tr->e2, qvec);
+    if (det < 0.0) {
+        det = -det;
+        bu = -bu;
+        bv = -bv;
+        bt = -bt;
+    }
+    if (!(bv >= 0.0 && bu + bv <= det))
+        return 0;
+    double tt = bt / det;
+    if (!(tt >= ray->tmin && tt <= tmax))
+        return 0;
+    *t = tt;
+    *bu_out = bu;
+    *bv_out = bv;
+    *det_out = det;
+    return 1;
+}
+
+ISECT_INLINE void triangle_uv(double bu, double bv, double det, double *u, double *v)
+{
+    *u = bu / det;
+    *v = bv / det;
+}
+
+/* --- polygon (even-odd crossing test; see polygon.c) ----------------------- */
+
+/* Even-odd test of (px, py) against the polygon projected on axes (au, av). */
+ISECT_INLINE int polygon_contains_2d(const bsp_vec3 *vs, uint32_t count, int au, int av, double px,
+                                     double py)
+{
+    int inside = 0;
+    const double *prev = vs[count - 1].v;
+    for (uint32_t i = 0; i < count; i++) {
+        const double *cur = vs[i].v;
+        if ((cur[av] > py) != (prev[av] > py)) {
+            const double *lo = cur[av] < prev[av] ? cur : prev;
+            const double *hi = lo == cur ? prev : cur;
+            double x = lo[au] + (py - lo[av]) * (hi[au] - lo[au]) / (hi[av] - lo[av]);
+            if (px < x)
+                inside ^= 1;
+        }
+        prev = cur;
+    }
+    return inside;
+}
+
+ISECT_INLINE int polygon_isect(const polygon_shape *p, const bsp_vec3 *verts, const isect_ray *ray,
+                               double tmax, double *t)
+{
+    double denom = v3_dot(p->normal, ray->dir);
+    if (denom == 0.0)
+        return 0;
+    double tt = (p->d - v3_dot(p->normal, ray->org)) / denom;
+    if (!(tt >= ray->tmin && tt <= tmax))
+        return 0;
+    int au = p->axis_u, av = p->axis_v;
+    double px = ray->org.v[au] + ray->dir.v[au] * tt;
+    double py = ray->org.v[av] + ray->dir.v[av] * tt;
+    if (!polygon_contains_2d(verts + p->first, p->count, au, av, px, py))
+        return 0;
+    *t = tt;
+    return 1;
+}
+
+/* --- cone (see cone.c) ------------------------------------------------------ */
+
+ISECT_INLINE int cone_valid_root(const cone_shape *c, const isect_ray *ray, double tmax, double h0,
+                                 double hd, double t)
+{
+    double h = h0 + t * hd;
+    return h >= 0.0 && h <= c->length && c->base_radius + c->slope * h >= 0.0 && t >= ray->tmin &&
+           t <= tmax;
+}
+
+ISECT_INLINE int cone_isect(const cone_shape *c, const isect_ray *ray, double tmax, double *t)
+{
+    bsp_vec3 oc = v3_sub(ray->org, c->base);
+    double h0 = v3_dot(oc, c->axis), hd = v3_dot(ray->dir, c->axis);
+    bsp_vec3 po = v3_madd(oc, c->axis, -h0);
+    bsp_vec3 pd = v3_madd(ray->dir, c->axis, -hd);
+    double ro = c->base_radius + c->slope * h0, rd = c->slope * hd;
+    double qa = v3_dot(pd, pd) - rd * rd;
+    double qb = v3_dot(po, pd) - ro * rd;
+    double qc = v3_dot(po, po) - ro * ro;
+
+    double t0, t1;
+    if (qa == 0.0) {
+        if (qb == 0.0)
+            return 0;
+        t0 = t1 = -qc / (2.0 * qb);
+    } else {
+        double disc = qb * qb - qa * qc;
+        if (!(disc >= 0.0))
+            return 0;
+        double q = -(qb + copysign(sqrt(disc), qb));
+        t0 = t1 = 0.0; /* q == 0: qb == 0 and qc == 0, a double root at 0 */
+        if (q != 0.0) {
+            t0 = q / qa;
+            t1 = qc / q;
+        }
+        if (t0 > t1) {
+            double tmp = t0;
+            t0 = t1;
+            t1 = tmp;
+        }
+    }
+    if (cone_valid_root(c, ray, tmax, h0, hd, t0)) {
+        *t = t0;
+        return 1;
+    }
+    if (cone_valid_root(c, ray, tmax, h0, hd, t1)) {
+        *t = t1;
+        return 1;
+    }
+    return 0;
+}
+
+#endif /* BSPRAY_GEOM_ISECT_H */
