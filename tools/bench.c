@@ -13,7 +13,7 @@
  *   5. shoot the recorded primary, shadow and secondary rays alone, with 1
  *      and with all threads, for the pure ray-shooting throughput of each
  *      class (closest hit for primary and secondary rays, any hit for shadow
- *      rays), in Mrays/s.
+ *      rays), in Mrays/s, the best of three passes.
  * Times are wall-clock seconds on a monotonic clock; single-thread figures
  * are the ones to compare across machines.
  */
@@ -69,7 +69,8 @@ static void print_help(void)
            "\n"
            "Columns: T_B build seconds; MB structure size; N_V leaves; N_IT intersection tests\n"
            "and N_TS traversal steps per ray (all rays of the render); T_TR render seconds on\n"
-           "1 and N threads; Mrays/s of pure ray shooting per class on 1 and N threads.\n",
+           "1 and N threads; Mrays/s of pure ray shooting per class on 1 and N threads (the\n"
+           "best of 3 passes over the recorded rays).\n",
            bench_usage, NAIVE_DEFAULT_MAX_PRIMS);
 }
 
@@ -127,6 +128,9 @@ static void *shoot_main(void *arg)
     bsp_query_destroy(q);
     return NULL;
 }
+
+/* Passes over a recorded ray set; bench reports the fastest. */
+#define SHOOT_REPEATS 3
 
 /* Mrays/s of shooting SET with THREADS threads (0 when the set is empty). */
 static double shoot_rate(const bsp_accel *accel, const ray_set *set, int any, int threads)
@@ -399,8 +403,14 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
             continue;
         }
         int any = c == BSP_RAY_SHADOW;
-        row.rate1[c] = shoot_rate(accel, &sets[c], any, 1);
-        row.raten[c] = shoot_rate(accel, &sets[c], any, o->threads);
+        /* best of SHOOT_REPEATS: one pass takes well under a second, and
+         * a shared machine disturbs single passes */
+        for (int rep = 0; rep < SHOOT_REPEATS; rep++) {
+            double r1 = shoot_rate(accel, &sets[c], any, 1);
+            double rn = shoot_rate(accel, &sets[c], any, o->threads);
+            row.rate1[c] = r1 > row.rate1[c] ? r1 : row.rate1[c];
+            row.raten[c] = rn > row.raten[c] ? rn : row.raten[c];
+        }
         free(sets[c].rays);
     }
     print_row(&row);
