@@ -362,6 +362,7 @@ sweep_axis(const sah_build *b, const uint64_t *e, size_t m, unsigned k, const bs
     const kd_area_fn area = b->area;
     const void *actx = b->actx;
     bsp_box lb = *cell, rb = *cell;
+    double last_p = NAN, last_al = 0.0, last_ar = 0.0; /* see the view-measure branch */
     double tl = 0.0, tr = tsum, best_cost = best->cost;
     size_t nl = 0, nr = n, best_i = SIZE_MAX, i = 0;
     /* the events at or below the cell's low end only count */
@@ -397,10 +398,17 @@ sweep_axis(const sah_build *b, const uint64_t *e, size_t m, unsigned k, const bs
             al = cross + (p - lo) * perim; /* half areas: the factor 2 is in inv_area */
             ar = cross + (hi - p) * perim;
         } else {
-            lb.hi.v[k] = p;
-            rb.lo.v[k] = p;
-            al = area(&lb, actx);
-            ar = area(&rb, actx);
+            /* a view measure costs far more than the surface area: events at
+             * the position just measured reuse its areas */
+            if (p != last_p) {
+                lb.hi.v[k] = p;
+                rb.lo.v[k] = p;
+                last_al = area(&lb, actx);
+                last_ar = area(&rb, actx);
+                last_p = p;
+            }
+            al = last_al;
+            ar = last_ar;
         }
         if (mailbox) {
             /* the rays through both children, measure al + ar - A(V), test
