@@ -28,6 +28,10 @@ const char *harness_shared_dir(void);
 const char *harness_cli(void);
 /* A fresh temporary directory for this run (created on first use). */
 const char *harness_tmpdir(void);
+/* Runs CMD through the shell; returns its standard output (malloc'd, NUL
+ * terminated; NULL when it cannot run) and sets *STATUS to its exit status
+ * (-1 when it did not exit normally). */
+char *harness_run(const char *cmd, int *status);
 
 #define TEST(name)                                                                          \
     static void name(void);                                                                 \

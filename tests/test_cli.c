@@ -7,34 +7,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/wait.h>
 
 #include "harness.h"
-
-/* Runs CMD through the shell; returns its output (malloc'd) and status. */
-static char *run(const char *cmd, int *status)
-{
-    FILE *p = popen(cmd, "r");
-    if (!p)
-        return NULL;
-    size_t cap = 1 << 16, len = 0, n;
-    char *buf = malloc(cap);
-    while (buf && (n = fread(buf + len, 1, cap - len - 1, p)) > 0) {
-        len += n;
-        if (cap - len < 4096) {
-            char *nb = realloc(buf, cap * 2);
-            if (!nb)
-                break;
-            buf = nb;
-            cap *= 2;
-        }
-    }
-    if (buf)
-        buf[len] = 0;
-    int st = pclose(p);
-    *status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    return buf;
-}
 
 static int count_lines(const char *s)
 {
@@ -52,7 +26,7 @@ TEST(cli_bench_table_and_csv)
              "%s bench spd:balls:1 spd:tetra:2 --res 17 --validate 300 --quiet --csv %s",
              harness_cli(), csv);
     int st;
-    char *out = run(cmd, &st);
+    char *out = harness_run(cmd, &st);
     REQUIRE(out);
     CHECK_EQ_INT(st, 0);
     CHECK_STR_CONTAINS(out, "| scene | N | method | T_B[s]");
@@ -77,7 +51,7 @@ TEST(cli_bench_table_and_csv)
     /* the default scene list runs too (here with one method on a tiny size
      * would take long; just check that an unknown method is a usage error) */
     snprintf(cmd, sizeof cmd, "%s bench spd:balls:1 --accel octree 2>&1", harness_cli());
-    out = run(cmd, &st);
+    out = harness_run(cmd, &st);
     REQUIRE(out);
     CHECK_EQ_INT(st, 2);
     CHECK_STR_CONTAINS(out, "unknown acceleration method 'octree'");
@@ -111,7 +85,7 @@ TEST(cli_bench_paper_counts)
              "--csv %s",
              harness_cli(), csv);
     int st;
-    char *out = run(cmd, &st);
+    char *out = harness_run(cmd, &st);
     REQUIRE(out);
     CHECK_EQ_INT(st, 0);
     CHECK_STR_CONTAINS(out, "| **# intersection tests per ray** |");
@@ -122,7 +96,7 @@ TEST(cli_bench_paper_counts)
         snprintf(cmd, sizeof cmd,
                  "%s render spd:rings:1 --res 513 --quiet %s --stats-json %s -o %s/paper.png",
                  harness_cli(), ortho ? "--ortho auto" : "", json[ortho], harness_tmpdir());
-        out = run(cmd, &st);
+        out = harness_run(cmd, &st);
         CHECK_EQ_INT(st, 0);
         free(out);
     }
@@ -161,7 +135,7 @@ TEST(cli_stats_of_a_tree)
     char cmd[1024];
     snprintf(cmd, sizeof cmd, "%s stats spd:tree:4 --accel sah --check", harness_cli());
     int st;
-    char *out = run(cmd, &st);
+    char *out = harness_run(cmd, &st);
     REQUIRE(out);
     CHECK_EQ_INT(st, 0);
     CHECK_STR_CONTAINS(out, "primitives: 63");
@@ -177,7 +151,7 @@ TEST(cli_gen_round_trip)
     snprintf(cmd, sizeof cmd, "%s gen tree -s 3 -o %s && %s stats %s", harness_cli(), path,
              harness_cli(), path);
     int st;
-    char *out = run(cmd, &st);
+    char *out = harness_run(cmd, &st);
     REQUIRE(out);
     CHECK_EQ_INT(st, 0);
     /* tree: 2^(SF+1) - 1 cones and spheres + 1 ground square */
@@ -202,7 +176,7 @@ TEST(cli_nff_corpus_exit_status)
         snprintf(path, sizeof path, "tests/data/nff_bad/%s", e->d_name);
         snprintf(cmd, sizeof cmd, "%s stats '%s' 2>&1 >/dev/null", harness_cli(), path);
         int st;
-        char *out = run(cmd, &st);
+        char *out = harness_run(cmd, &st);
         REQUIRE(out);
         CHECK_MSG(st == 1, "%s: exit status %d, expected 1", path, st);
         CHECK_MSG(strstr(out, path) != NULL, "%s: message does not name the file: %s", path, out);

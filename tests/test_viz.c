@@ -9,7 +9,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/wait.h>
 
 #include "bspray/bspray.h"
 #include "harness.h"
@@ -41,29 +40,12 @@ static int is_black(const bsp_image *img, int x, int y)
     return p[0] == 0 && p[1] == 0 && p[2] == 0;
 }
 
-/* Runs CMD through the shell, discarding its output; returns the exit status. */
+/* Runs CMD, discarding its output; returns the exit status. */
 static int run_status(const char *cmd)
 {
-    int st = system(cmd);
-    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-}
-
-/* Runs CMD; returns its output (malloc'd, stderr included by the caller's
- * 2>&1) and status. */
-static char *run_output(const char *cmd, int *status)
-{
-    FILE *p = popen(cmd, "r");
-    if (!p)
-        return NULL;
-    size_t cap = 1 << 14, len = 0, n;
-    char *buf = malloc(cap);
-    while (buf && (n = fread(buf + len, 1, cap - len - 1, p)) > 0)
-        len += n;
-    if (buf)
-        buf[len] = 0;
-    int st = pclose(p);
-    *status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    return buf;
+    int st;
+    free(harness_run(cmd, &st));
+    return st;
 }
 
 /* --- projection ------------------------------------------------------------------ */
@@ -380,7 +362,7 @@ TEST(viz_cli_writes_panels_and_rejects_bad_input)
              "%s viz spd:balls:1 --color refs --size 40 --threads 1 --max-depth 4 -o %s 2>&1",
              harness_cli(), out);
     int st;
-    char *text = run_output(cmd, &st);
+    char *text = harness_run(cmd, &st);
     REQUIRE(text);
     CHECK_EQ_INT(st, 0);
     CHECK_STR_CONTAINS(text, "sah");
@@ -403,21 +385,21 @@ TEST(viz_cli_writes_panels_and_rejects_bad_input)
     CHECK_EQ_INT(run_status(cmd), 2); /* no -o */
 
     snprintf(cmd, sizeof cmd, "%s viz spd:balls:1 --accel naive -o %s 2>&1", harness_cli(), out);
-    text = run_output(cmd, &st);
+    text = harness_run(cmd, &st);
     REQUIRE(text);
     CHECK_EQ_INT(st, 1);
     CHECK_STR_CONTAINS(text, "naive");
     free(text);
     snprintf(cmd, sizeof cmd, "%s viz %s/no-such-scene.nff -o %s 2>&1", harness_cli(),
              harness_tmpdir(), out);
-    text = run_output(cmd, &st);
+    text = harness_run(cmd, &st);
     REQUIRE(text);
     CHECK_EQ_INT(st, 1);
     CHECK_STR_CONTAINS(text, "no-such-scene.nff");
     free(text);
 
     snprintf(cmd, sizeof cmd, "%s viz --help", harness_cli());
-    text = run_output(cmd, &st);
+    text = harness_run(cmd, &st);
     REQUIRE(text);
     CHECK_EQ_INT(st, 0);
     CHECK_STR_CONTAINS(text, "usage: bspray viz");
