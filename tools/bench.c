@@ -420,26 +420,6 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     return 0;
 }
 
-static void parse_accel_list(args *a, bench_opts *o)
-{
-    const char *v = opt_value(a, "--accel");
-    char buf[256];
-    snprintf(buf, sizeof buf, "%s", v);
-    o->nkinds = 0;
-    o->kinds_given = 1;
-    char *save = NULL;
-    for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-        bsp_error err;
-        bsp_accel_kind k;
-        if (bsp_accel_kind_parse(tok, &k, &err) != BSP_OK)
-            die_usage(a->usage, "%s", err.message);
-        if (o->nkinds < BSP_ACCEL_KIND_COUNT)
-            o->kinds[o->nkinds++] = k;
-    }
-    if (o->nkinds == 0)
-        die_usage(a->usage, "%s", "--accel needs at least one method");
-}
-
 int cmd_bench(int argc, char **argv)
 {
     for (int i = 1; i < argc; i++)
@@ -474,7 +454,8 @@ int cmd_bench(int argc, char **argv)
             free(scenes);
             return 0;
         } else if (!strcmp(s, "--accel")) {
-            parse_accel_list(&a, &o);
+            o.nkinds = parse_accel_list(&a, opt_value(&a, s), o.kinds, BSP_ACCEL_KIND_COUNT);
+            o.kinds_given = 1;
         } else if (!strcmp(s, "--res")) {
             o.res = parse_int(&a, s, 1, 65536);
         } else if (!strcmp(s, "--depth")) {

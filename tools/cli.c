@@ -92,6 +92,33 @@ void parse_accel(args *a, bsp_build_options *opts)
 }
 
 
+int parse_accel_list(args *a, const char *list, bsp_accel_kind *kinds, int max)
+{
+    int n = 0;
+    for (const char *p = list;;) {
+        const char *comma = strchr(p, ',');
+        size_t len = comma ? (size_t)(comma - p) : strlen(p);
+        char name[64];
+        if (len == 0 || len >= sizeof name)
+            die_usage(a->usage,
+                      "option '--accel' needs a comma-separated list of methods, got '%s'", list);
+        if (n == max) {
+            char msg[96];
+            snprintf(msg, sizeof msg, "option '--accel' takes at most %d methods, got '%%s'", max);
+            die_usage(a->usage, msg, list);
+        }
+        memcpy(name, p, len);
+        name[len] = 0;
+        bsp_error err;
+        if (bsp_accel_kind_parse(name, &kinds[n], &err) != BSP_OK)
+            die_usage(a->usage, "%s", err.message);
+        n++;
+        if (!comma)
+            return n;
+        p = comma + 1;
+    }
+}
+
 bsp_vec3 parse_vec3(args *a, const char *opt)
 {
     const char *v = opt_value(a, opt);

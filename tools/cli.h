@@ -29,6 +29,10 @@ int parse_on_off(args *a, const char *opt);
 int is_help(const char *s);
 /* A vector "x,y,z" as the value of OPT, or a usage error. */
 bsp_vec3 parse_vec3(args *a, const char *opt);
+/* A comma-separated list of methods (the value of --accel) into KINDS[0..MAX);
+ * returns how many. An empty item, an unknown name or more than MAX names
+ * is a usage error. */
+int parse_accel_list(args *a, const char *list, bsp_accel_kind *kinds, int max);
 /* --accel METHOD into OPTS->kind, or a usage error listing the methods. */
 void parse_accel(args *a, bsp_build_options *opts);
 /* Options that choose and tune the acceleration structure: --accel,

@@ -108,26 +108,15 @@ static void print_help(void)
 
 static void parse_rules(args *a, paper_opts *o)
 {
-    const char *v = opt_value(a, "--accel");
-    char buf[256];
-    snprintf(buf, sizeof buf, "%s", v);
-    o->nrules = 0;
-    char *save = NULL;
-    for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-        bsp_error err;
-        bsp_accel_kind k;
-        if (bsp_accel_kind_parse(tok, &k, &err) != BSP_OK)
-            die_usage(a->usage, "%s", err.message);
-        if (k == BSP_ACCEL_NAIVE)
+    bsp_accel_kind kinds[MAX_RULES];
+    o->nrules = parse_accel_list(a, opt_value(a, "--accel"), kinds, MAX_RULES);
+    for (int r = 0; r < o->nrules; r++) {
+        if (kinds[r] == BSP_ACCEL_NAIVE)
             die_usage(a->usage, "%s", "--paper compares trees; naive has none");
-        if (o->nrules >= MAX_RULES)
-            die_usage(a->usage, "%s", "--accel: too many rules");
-        int ortho = k == BSP_ACCEL_SAH_PAR;
-        o->rules[o->nrules++] =
-            (paper_rule){ortho ? "sah-par, ortho" : bsp_accel_kind_name(k), k, ortho};
+        int ortho = kinds[r] == BSP_ACCEL_SAH_PAR;
+        o->rules[r] = (paper_rule){ortho ? "sah-par, ortho" : bsp_accel_kind_name(kinds[r]),
+                                   kinds[r], ortho};
     }
-    if (o->nrules == 0)
-        die_usage(a->usage, "%s", "--accel needs at least one rule");
 }
 
 /* Builds, validates and renders one scene x rule into *C; 0, or 1 on failure. */

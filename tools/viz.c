@@ -77,27 +77,11 @@ typedef struct viz_row {
 /* Splits LIST at commas into ROWS; usage error for an unknown name. */
 static int parse_rules(args *a, const char *list, viz_row *rows)
 {
-    int n = 0;
-    const char *p = list;
-    for (;;) {
-        const char *comma = strchr(p, ',');
-        size_t len = comma ? (size_t)(comma - p) : strlen(p);
-        char name[64];
-        if (len == 0 || len >= sizeof name)
-            die_usage(a->usage,
-                      "option '--accel' needs a comma-separated list of methods, got '%s'", list);
-        if (n == VIZ_MAX_RULES)
-            die_usage(a->usage, "option '--accel' takes at most 8 methods, got '%s'", list);
-        memcpy(name, p, len);
-        name[len] = 0;
-        bsp_error err;
-        if (bsp_accel_kind_parse(name, &rows[n].kind, &err) != BSP_OK)
-            die_usage(a->usage, "%s", err.message);
-        n++;
-        if (!comma)
-            return n;
-        p = comma + 1;
-    }
+    bsp_accel_kind kinds[VIZ_MAX_RULES];
+    int n = parse_accel_list(a, list, kinds, VIZ_MAX_RULES);
+    for (int r = 0; r < n; r++)
+        rows[r].kind = kinds[r];
+    return n;
 }
 
 static void text_upper(char *s)
