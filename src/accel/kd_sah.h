@@ -1,0 +1,184 @@
+/*
+ * kd_sah.h — what the SAH builder (kd_split_sah.c) shares with its plane
+ * sweeps (kd_sweep_measure.c: any measure; kd_sweep_linear.c: the surface
+ * area with a linear cost): the 64-bit events and their keys, the builder's
+ * state, and the two sweeps. See kd_split_sah.c for the events and the cost
+ * model.
+ */
+#ifndef BSPRAY_ACCEL_KD_SAH_H
+#define BSPRAY_ACCEL_KD_SAH_H
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "accel/kd_clip.h"
+#include "accel/kd_cost.h"
+#include "accel/kd_tree.h"
+
+
+#define EV_START ((uint64_t)1 << 31)
+#define EV_PRIM 0x0fffffffu /* SCENE_MAX_PRIMS = 2^28 */
+
+_Static_assert(SCENE_MAX_PRIMS <= (size_t)EV_PRIM + 1, "primitive index fits an event");
+
+enum { CLS_LEFT = 1, CLS_RIGHT = 2, CLS_BOTH = 3 };
+
+/* --- keys ------------------------------------------------------------------------------ */
+
+static inline uint32_t float_key(float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+
+static inline float key_float(uint32_t k)
+{
+    uint32_t u = k ^ (((k >> 31) - 1u) | 0x80000000u); /* branch-free inverse */
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+static inline uint64_t make_event(float pos, int start, uint32_t prim)
+{
+    return ((uint64_t)float_key(pos) << 32) | (start ? EV_START : 0) | prim;
+}
+
+static inline uint32_t ev_prim(uint64_t e)
+{
+    return (uint32_t)e & EV_PRIM;
+}
+
+/* The float next to F towards -inf (F finite or +inf; F = -0 never occurs:
+ * callers normalise zeros). */
+static inline float float_below(float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    if (f == 0.0f)
+        u = 0x80000001u; /* the negative subnormal nearest 0 */
+    else if (u & 0x80000000u)
+        u++;
+    else
+        u--;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+static inline float float_above(float f)
+{
+    return -float_below(-f);
+}
+
+/* The largest float <= X and the smallest float >= X (never -0). */
+static inline float round_down(double x)
+{
+    float f = (float)x;
+    if ((double)f > x)
+        f = float_below(f == 0.0f ? 0.0f : f);
+    return f == 0.0f ? 0.0f : f;
+}
+
+static inline float round_up(double x)
+{
+    float f = (float)x;
+    if ((double)f < x)
+        f = float_above(f == 0.0f ? 0.0f : f);
+    return f == 0.0f ? 0.0f : f;
+}
+
+/* --- builder state ---------------------------------------------------------------------- */
+
+/* How the sweep finds T_i: all equal; by one of at most 8 distinct values,
+ * whose index rides in the spare bits 28..30 of the event (so events order
+ * by position, type, cost class, primitive); or by primitive (more kinds of
+ * cost, e.g. polygons of many vertex counts). */
+enum { COST_UNIFORM, COST_CLASS, COST_ARRAY };
+#define EV_CLASS_SHIFT 28
+
+typedef struct sah_build {
+    kd_tree *t;
+    const bsp_scene *scene;
+    kd_area_fn area;
+    const void *actx;
+    int surface;        /* AREA is the surface area: evaluated inline */
+    int to_limits;      /* split until the depth/leaf-size limits, whatever the cost */
+    double ctrav;       /* C_trav */
+    double bonus_mul;   /* 1 - empty bonus */
+    int mailbox;        /* mailbox-aware costs (kd_cost_model.mailbox) */
+    double mb_hit;      /* the cost of a test the mailbox skips */
+    int cost_mode;      /* COST_*: how an event finds its T_i */
+    double unif;        /* COST_UNIFORM: the T_i of every primitive */
+    double class_cost[8]; /* COST_CLASS: T_i by the class in event bits 28..30 */
+    uint8_t *pclass;    /* COST_CLASS: the class per primitive */
+    double *cost;       /* T_i per primitive (NULL when uniform), quantized */
+    int linear;         /* every T_i >= mb_hit: the fast sweep's linear cost applies */
+    uint64_t *chunks;   /* the fast sweep's run sums (lin_chunk), grown on demand */
+    size_t chunks_cap;
+    uint8_t *cls;       /* per primitive: CLS_* at the latest split it took part in */
+    uint64_t *ev;       /* the event stack */
+    size_t cap;
+    uint64_t *nev[2];   /* new events of straddlers per side, axis j at j * stride */
+    size_t nev_cap;
+    uint32_t *list;     /* straddlers, leaf lists */
+    size_t list_cap;
+    kd_clip_scratch clip;
+    bsp_error *err;
+} sah_build;
+
+static inline int grow_u64(uint64_t **p, size_t *cap, size_t need)
+{
+    if (need <= *cap)
+        return 1;
+    size_t ncap = *cap * 2 > need ? *cap * 2 : need;
+    uint64_t *np = realloc(*p, ncap * sizeof *np);
+    if (!np)
+        return 0;
+    *p = np;
+    *cap = ncap;
+    return 1;
+}
+
+typedef struct split_choice {
+    double cost;
+    unsigned axis;
+    float pos;
+    int found;
+} split_choice;
+
+static inline double ev_cost(const sah_build *b, uint64_t x, int mode)
+{
+    return mode == COST_UNIFORM ? b->unif
+           : mode == COST_CLASS ? b->class_cost[(x >> EV_CLASS_SHIFT) & 7]
+                                : (double)b->cost[ev_prim(x)];
+}
+
+static inline double ev_t(const sah_build *b, uint64_t x, int mode)
+{
+    return mode == COST_UNIFORM ? 1.0
+           : mode == COST_CLASS ? b->class_cost[(x >> EV_CLASS_SHIFT) & 7]
+                                : (double)b->cost[ev_prim(x)];
+}
+
+static inline double ev_pos(uint64_t x)
+{
+    return (double)key_float((uint32_t)(x >> 32));
+}
+
+/* The best plane on axis K of a node (its sorted events E[0..M), N
+ * primitives, cost sum TSUM, cell CELL, 1 / its measure INV_AREA — halved
+ * measures when SURFACE) by a full sweep of any measure, kept in *BEST when
+ * cheaper (kd_sweep_measure.c). */
+HIDDEN void kd_sweep_measure(const sah_build *b, const uint64_t *e, size_t m, unsigned k,
+                             const bsp_box *cell, double inv_area, double tsum, size_t n,
+                             int surface, split_choice *best);
+
+/* The best plane of a node on all three axes (lists at EV + k * STRIDE) by
+ * the pruned sweep of the surface area (b->linear; kd_sweep_linear.c). */
+HIDDEN void kd_sweep_linear(sah_build *b, const uint64_t *ev, size_t stride, size_t n,
+                            double tsum, const bsp_box *cell, double inv_area,
+                            split_choice *best);
+
+#endif /* BSPRAY_ACCEL_KD_SAH_H */
