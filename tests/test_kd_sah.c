@@ -924,6 +924,62 @@ TEST(sah_clip_is_conservative_and_tight)
     kd_clip_scratch_free(&scr);
 }
 
+/* Clipping a straddler once for both children (kd_clip_prim_split) gives
+ * what clipping it to each child does, up to rounding far below the
+ * padding, and the same emptiness away from the borderline. */
+TEST(sah_split_clip_matches_clipping_each_child)
+{
+    rng_state = 733;
+    int trials = quick() ? 300 : 2000, both = 0;
+    for (int trial = 0; trial < trials; trial++) {
+        bsp_scene *s = bsp_scene_create();
+        bsp_vec3 v[3];
+        for (int i = 0; i < 3; i++)
+            v[i] = bsp_v3(rnd_in(-3, 3), rnd_in(-3, 3), rnd_in(-3, 3));
+        if (trial % 5 == 0)
+            v[2].v[trial % 3] = v[1].v[trial % 3] = v[0].v[trial % 3]; /* in an axis plane */
+        add_tri(s, v[0], v[1], v[2]);
+        add_sphere(s, bsp_v3(rnd_in(-3, 3), rnd_in(-3, 3), rnd_in(-3, 3)), rnd_in(0.1, 2));
+        bsp_box cell;
+        for (int k = 0; k < 3; k++) {
+            double a = rnd_in(-3, 3), b = rnd_in(-3, 3);
+            cell.lo.v[k] = fmin(a, b);
+            cell.hi.v[k] = fmax(a, b);
+        }
+        unsigned axis = (unsigned)(trial % 3);
+        double sp = cell.lo.v[axis] + rnd_in(0.05, 0.95) * (cell.hi.v[axis] - cell.lo.v[axis]);
+        if (trial % 7 == 0)
+            sp = v[0].v[axis] > cell.lo.v[axis] && v[0].v[axis] < cell.hi.v[axis] ? v[0].v[axis]
+                                                                                  : sp;
+        double pad = 1e-7 * 3;
+        for (uint32_t prim = 0; prim < 2; prim++) {
+            bsp_box pb = bsp_scene_prim_bounds(s, prim), split[2];
+            int got = kd_clip_prim_split(s, prim, pb, &cell, axis, sp, pad, NULL, split);
+            REQUIRE(got >= 0);
+            for (int c = 0; c < 2; c++) {
+                bsp_box child = cell, one;
+                if (c == 0)
+                    child.hi.v[axis] = sp;
+                else
+                    child.lo.v[axis] = sp;
+                int r = kd_clip_prim(s, prim, &child, pad, NULL, &one);
+                REQUIRE(r >= 0);
+                CHECK_MSG((got >> c & 1) == r, "trial %d prim %u side %d: split %d, child %d",
+                          trial, prim, c, got >> c & 1, r);
+                if (r == 1 && (got >> c & 1)) {
+                    for (int k = 0; k < 3; k++) {
+                        CHECK(fabs(split[c].lo.v[k] - one.lo.v[k]) <= 1e-12);
+                        CHECK(fabs(split[c].hi.v[k] - one.hi.v[k]) <= 1e-12);
+                    }
+                }
+            }
+            both += got == 3;
+        }
+        bsp_scene_destroy(s);
+    }
+    CHECK(both > trials / 20); /* straddlers were met */
+}
+
 /* --- determinism, calibration, scaling -------------------------------------------------------------- */
 
 TEST(sah_build_is_deterministic)

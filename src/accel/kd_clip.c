@@ -161,6 +161,55 @@ static int clip_triangle(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g, bsp_
     return 1;
 }
 
+/* Clips triangle V (bounds PB) to G into OUT[0..*N) (at most 9 vertices):
+ * returns 1 when it clipped, 0 with *N = 0 when nothing is left, 0 with
+ * *N = 3 when no plane of G crosses PB (V itself is the part). */
+static int clip_triangle_into(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g, bsp_vec3 out[12],
+                              size_t *np)
+{
+    bsp_vec3 buf[12];
+    const bsp_vec3 *cur = v;
+    size_t n = 3;
+    int clipped = 0;
+    for (int pl = 0; pl < 6; pl++) {
+        int k = pl >> 1, above = !(pl & 1);
+        double c = above ? g->lo.v[k] : g->hi.v[k];
+        if (above ? !(pb.lo.v[k] < c) : !(pb.hi.v[k] > c))
+            continue;
+        /* ping-pong so that the last output lands in OUT */
+        bsp_vec3 *dst = (cur == out) ? buf : out;
+        n = clip_plane(cur, n, dst, k, c, above);
+        if (n == 0) {
+            *np = 0;
+            return 0;
+        }
+        cur = dst;
+        clipped = 1;
+    }
+    if (clipped && cur != out)
+        for (size_t i = 0; i < n; i++)
+            out[i] = cur[i];
+    *np = n;
+    return clipped;
+}
+
+/* Clamps the bounds B of a clipped part to the unclipped bounds PB and to G
+ * (both contain the true part), pads them by PAD into *OUT; 0 when the
+ * clamp leaves nothing. */
+static int finish(bsp_box b, bsp_box pb, const bsp_box *g, double pad, bsp_box *out)
+{
+    for (int k = 0; k < 3; k++) {
+        b.lo.v[k] = dmax(dmax(b.lo.v[k], pb.lo.v[k]), g->lo.v[k]);
+        b.hi.v[k] = dmin(dmin(b.hi.v[k], pb.hi.v[k]), g->hi.v[k]);
+        if (b.lo.v[k] > b.hi.v[k])
+            return 0;
+        b.lo.v[k] -= pad;
+        b.hi.v[k] += pad;
+    }
+    *out = b;
+    return 1;
+}
+
 /* Bounds of the sphere's surface ∩ G (through the ball ∩ G, exact per
  * axis); 0 when the ball misses G or G lies inside the sphere. */
 static int clip_sphere(const sphere_shape *s, const bsp_box *g, bsp_box *b)
@@ -216,8 +265,15 @@ static int box_meets(bsp_box a, const bsp_box *g)
 int kd_clip_prim(const bsp_scene *scene, uint32_t prim, const bsp_box *box, double pad,
                  kd_clip_scratch *scr, bsp_box *out)
 {
+    return kd_clip_prim_bounded(scene, prim, bsp_scene_prim_bounds(scene, prim), box, pad, scr,
+                                out);
+}
+
+int kd_clip_prim_bounded(const bsp_scene *scene, uint32_t prim, bsp_box pb, const bsp_box *box,
+                         double pad, kd_clip_scratch *scr, bsp_box *out)
+{
     const prim_record *p = &scene->prims[prim];
-    bsp_box g = *box, pb = bsp_scene_prim_bounds(scene, prim), b;
+    bsp_box g = *box, b;
     for (int k = 0; k < 3; k++) {
         g.lo.v[k] -= pad;
         g.hi.v[k] += pad;
@@ -251,13 +307,7 @@ int kd_clip_prim(const bsp_scene *scene, uint32_t prim, const bsp_box *box, doub
         }
         if (r != 1)
             return r;
-        /* never beyond the unclipped bounds nor beyond G */
-        for (int k = 0; k < 3; k++) {
-            b.lo.v[k] = dmax(dmax(b.lo.v[k], pb.lo.v[k]), g.lo.v[k]);
-            b.hi.v[k] = dmin(dmin(b.hi.v[k], pb.hi.v[k]), g.hi.v[k]);
-            if (b.lo.v[k] > b.hi.v[k])
-                return 0;
-        }
+        return finish(b, pb, &g, pad, out);
     }
     for (int k = 0; k < 3; k++) {
         b.lo.v[k] -= pad;
@@ -265,4 +315,91 @@ int kd_clip_prim(const bsp_scene *scene, uint32_t prim, const bsp_box *box, doub
     }
     *out = b;
     return 1;
+}
+
+/* The bounds of the part of triangle V (bounds PB) in each child of CELL
+ * split at S on AXIS: the triangle is clipped once to the parent's G, and
+ * that polygon once more by each child's side — the same sets as clipping
+ * to each child's G, about half the work. */
+static int clip_triangle_split(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g, unsigned axis,
+                               double s, double pad, bsp_box out[2])
+{
+    bsp_vec3 par[12], side[24];
+    bsp_box pc;
+    size_t n = 3;
+    const bsp_vec3 *cur = v;
+    if (clip_triangle_into(v, pb, g, par, &n)) {
+        cur = par;
+        pc = box_empty();
+        for (size_t i = 0; i < n; i++)
+            pc = box_add_point(pc, cur[i]);
+    } else if (n == 0) {
+        return 0;
+    } else {
+        pc = pb; /* not clipped: inside G */
+    }
+    int got = 0;
+    for (int c = 0; c < 2; c++) {
+        bsp_box gc = *g;
+        if (c == 0)
+            gc.hi.v[axis] = s + pad;
+        else
+            gc.lo.v[axis] = s - pad;
+        if (box_inside(pb, &gc)) {
+            bsp_box b = pb;
+            for (int k = 0; k < 3; k++) {
+                b.lo.v[k] -= pad;
+                b.hi.v[k] += pad;
+            }
+            out[c] = b;
+            got |= 1 << c;
+            continue;
+        }
+        bsp_box b;
+        if (c == 0 ? pc.hi.v[axis] <= gc.hi.v[axis] : pc.lo.v[axis] >= gc.lo.v[axis]) {
+            b = pc; /* the clipped part lies on this side */
+        } else {
+            size_t m = clip_plane(cur, n, side, (int)axis, c == 0 ? gc.hi.v[axis] : gc.lo.v[axis],
+                                  c == 1);
+            if (m == 0)
+                continue;
+            b = box_empty();
+            for (size_t i = 0; i < m; i++)
+                b = box_add_point(b, side[i]);
+        }
+        if (finish(b, pb, &gc, pad, &out[c]) == 1)
+            got |= 1 << c;
+    }
+    return got;
+}
+
+int kd_clip_prim_split(const bsp_scene *scene, uint32_t prim, bsp_box pb, const bsp_box *cell,
+                       unsigned axis, double s, double pad, kd_clip_scratch *scr, bsp_box out[2])
+{
+    const prim_record *p = &scene->prims[prim];
+    if ((shape_kind)p->shape == SHAPE_TRIANGLE) {
+        bsp_box g = *cell;
+        for (int k = 0; k < 3; k++) {
+            g.lo.v[k] -= pad;
+            g.hi.v[k] += pad;
+        }
+        if (box_is_empty(pb) || !box_meets(pb, &g))
+            return 0;
+        const triangle_shape *tr = &scene->triangles[p->slot];
+        bsp_vec3 vs[3] = {tr->v0, v3_add(tr->v0, tr->e1), v3_add(tr->v0, tr->e2)};
+        return clip_triangle_split(vs, pb, &g, axis, s, pad, out);
+    }
+    int got = 0;
+    for (int c = 0; c < 2; c++) {
+        bsp_box child = *cell;
+        if (c == 0)
+            child.hi.v[axis] = s;
+        else
+            child.lo.v[axis] = s;
+        int r = kd_clip_prim_bounded(scene, prim, pb, &child, pad, scr, &out[c]);
+        if (r < 0)
+            return -1;
+        got |= r << c;
+    }
+    return got;
 }

@@ -36,6 +36,19 @@ HIDDEN void kd_clip_scratch_free(kd_clip_scratch *scr);
  * of memory. */
 HIDDEN int kd_clip_prim(const bsp_scene *scene, uint32_t prim, const bsp_box *box, double pad,
                         kd_clip_scratch *scr, bsp_box *out);
+/* The same with PB = bsp_scene_prim_bounds(scene, prim) given (a builder
+ * that clips a primitive many times keeps its bounds). */
+HIDDEN int kd_clip_prim_bounded(const bsp_scene *scene, uint32_t prim, bsp_box pb,
+                                const bsp_box *box, double pad, kd_clip_scratch *scr,
+                                bsp_box *out);
+
+/* kd_clip_prim_bounded for both children of CELL split at S on AXIS, into
+ * OUT[0] (left) and OUT[1] (right): returns a bit mask of the children the
+ * part is not empty in (bit 0: left), or -1 when out of memory. Triangles
+ * are clipped once to CELL and that part once by each side. */
+HIDDEN int kd_clip_prim_split(const bsp_scene *scene, uint32_t prim, bsp_box pb,
+                              const bsp_box *cell, unsigned axis, double s, double pad,
+                              kd_clip_scratch *scr, bsp_box out[2]);
 
 /* The checker (kd_tree_check) asks for a primitive in every leaf its bounds
  * clipped with this fraction of the tree's padding overlap: the builder clips

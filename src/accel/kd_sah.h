@@ -22,7 +22,8 @@
 
 _Static_assert(SCENE_MAX_PRIMS <= (size_t)EV_PRIM + 1, "primitive index fits an event");
 
-enum { CLS_LEFT = 1, CLS_RIGHT = 2, CLS_BOTH = 3 };
+/* a primitive's side at a split: one bit per one-sided list (see build_node) */
+enum { CLS_BOTH = 0, CLS_LEFT = 1, CLS_RIGHT = 2 };
 
 /* --- keys ------------------------------------------------------------------------------ */
 
@@ -117,7 +118,10 @@ typedef struct sah_build {
     int linear;         /* every T_i >= mb_hit: the fast sweep's linear cost applies */
     uint64_t *chunks;   /* the fast sweep's run sums (lin_chunk), grown on demand */
     size_t chunks_cap;
-    uint8_t *cls;       /* per primitive: CLS_* at the latest split it took part in */
+    uint8_t *cls;       /* per primitive: CLS_* at the latest split it took part in;
+                           cls[spare] absorbs the writes of a branch-free loop */
+    uint32_t spare;
+    bsp_box *bounds;    /* per primitive: bsp_scene_prim_bounds, for clipping */
     uint64_t *ev;       /* the event stack */
     size_t cap;
     uint64_t *nev[2];   /* new events of straddlers per side, axis j at j * stride */

@@ -77,14 +77,17 @@
 
 /* --- sorting -------------------------------------------------------------------------- */
 
-/* LSD radix sort of A[0..N) by the whole key: 6 passes of 11 bits through
- * TMP[0..N), skipping a pass where every key has the same digit. */
+/* Stable LSD radix sort of A[0..N) by key bits 28..63 (position, type, cost
+ * class): 3 passes of 12 bits through TMP[0..N), skipping a pass where every
+ * key has the same digit. Keys made in primitive order (bits 0..27) end up
+ * in the order of the whole key. */
 static void radix_sort(uint64_t *a, uint64_t *tmp, size_t n)
 {
-    enum { BITS = 11, BUCKETS = 1 << BITS };
+    enum { BITS = 12, BUCKETS = 1 << BITS, LOW = EV_CLASS_SHIFT };
+    _Static_assert(LOW + 3 * BITS == 64, "three passes cover the bits above the primitive");
     size_t count[BUCKETS];
     uint64_t *src = a, *dst = tmp;
-    for (int shift = 0; shift < 64; shift += BITS) {
+    for (int shift = LOW; shift < 64; shift += BITS) {
         memset(count, 0, sizeof count);
         for (size_t i = 0; i < n; i++)
             count[(src[i] >> shift) & (BUCKETS - 1)]++;
@@ -222,21 +225,15 @@ static bsp_status make_leaf(sah_build *b, uint32_t node, const uint64_t *e, size
     return put_leaf(b->t, node, b->list, c) ? BSP_OK : oom(b);
 }
 
-/* Clips straddler P to CELL and writes its 6 events at OUT[k * stride + at]
- * (k = 0..2) when the rounded clipped box overlaps CELL; returns 1 then. */
-static int clipped_events(sah_build *b, uint32_t p, const bsp_box *cell, uint64_t *out,
-                          size_t stride, size_t at, int *fail)
+/* Writes the 6 events of straddler P's clipped box CB at OUT[k * stride + at]
+ * (k = 0..2) when CB rounded outward to floats overlaps CELL; returns 1 then. */
+static int clipped_events(const sah_build *b, uint32_t p, const bsp_box *cb, const bsp_box *cell,
+                          uint64_t *out, size_t stride, size_t at)
 {
-    bsp_box cb;
-    int r = kd_clip_prim(b->scene, p, cell, b->t->pad, &b->clip, &cb);
-    if (r < 0)
-        *fail = 1;
-    if (r <= 0)
-        return 0;
     float lo[3], hi[3];
     for (int k = 0; k < 3; k++) {
-        lo[k] = round_down(cb.lo.v[k]);
-        hi[k] = round_up(cb.hi.v[k]);
+        lo[k] = round_down(cb->lo.v[k]);
+        hi[k] = round_up(cb->hi.v[k]);
         if (!((double)lo[k] < cell->hi.v[k] && (double)hi[k] > cell->lo.v[k]))
             return 0; /* touches the cell at most on its boundary */
     }
@@ -305,38 +302,56 @@ static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
         bad_here = 1;
     }
 
-    /* 2. classify by the split axis's events (keys compare as positions):
-     * START >= s: right only; END <= s: left only (lo < hi <= s); the rest
-     * straddles. Counts and cost sums of the one-sided ones on the way. */
+    /* 2. classify by the split axis's events. In key order, the events below
+     * the split key SK (positions < s, and ENDs at s) come first: there a
+     * START (lo < s) makes its primitive tentatively BOTH and an END
+     * (hi <= s) makes it LEFT; above SK a START (lo >= s) makes it RIGHT and
+     * an END changes nothing (a primitive whose START lay below stays BOTH:
+     * a straddler). So neither loop reads the class back: the first writes
+     * every event's primitive, the second only STARTs' (the others go to the
+     * spare slot cls[np]). Counts and cost sums of the one-sided ones on the
+     * way. */
     const unsigned axis = best.axis;
     const double s = (double)best.pos;
-    const uint32_t ks = float_key(best.pos);
     size_t n_lonly = 0, n_ronly = 0;
     double t_lonly = 0.0, t_ronly = 0.0;
     {
         const uint64_t *e = b->ev + L.base + axis * L.stride;
+        const uint64_t sk = ((uint64_t)float_key(best.pos) << 32) | EV_START;
+        size_t lo = 0, hi = m; /* the first event >= SK */
+        while (lo < hi) {
+            size_t mid = lo + (hi - lo) / 2;
+            if (e[mid] < sk)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        const size_t split_i = lo;
         uint8_t *cls = b->cls;
-        for (size_t i = 0; i < m; i++) {
+        const uint32_t spare = b->spare;
+        const int mode = b->cost_mode;
+        for (size_t i = 0; i < split_i; i++) {
             uint64_t x = e[i];
-            uint32_t p = ev_prim(x), hk = (uint32_t)(x >> 32);
             size_t start = (size_t)(x >> 31) & 1;
-            size_t is_r = start & (hk >= ks), is_l = (start ^ 1) & (hk <= ks);
-            uint8_t c_start = is_r ? CLS_RIGHT : CLS_BOTH;
-            uint8_t c_end = is_l ? CLS_LEFT : cls[p];
-            cls[p] = start ? c_start : c_end;
-            n_ronly += is_r;
-            n_lonly += is_l;
-            if (b->cost_mode != COST_UNIFORM) {
-                double tp = ev_cost(b, x, b->cost_mode);
-                t_ronly += is_r ? tp : 0.0;
-                t_lonly += is_l ? tp : 0.0;
-            }
+            cls[ev_prim(x)] = start ? CLS_BOTH : CLS_LEFT;
+            n_lonly += start ^ 1;
+            if (mode != COST_UNIFORM)
+                t_lonly += start ? 0.0 : ev_cost(b, x, mode);
+        }
+        for (size_t i = split_i; i < m; i++) {
+            uint64_t x = e[i];
+            size_t start = (size_t)(x >> 31) & 1;
+            cls[start ? ev_prim(x) : spare] = CLS_RIGHT;
+            n_ronly += start;
+            if (mode != COST_UNIFORM)
+                t_ronly += start ? ev_cost(b, x, mode) : 0.0;
         }
     }
     const size_t ns = n - n_lonly - n_ronly;
 
     /* 3. the one-sided events, in one pass per axis: right ones compacted
-     * above TOP, left ones in place (the straddlers gathered on the way) */
+     * above TOP, left ones in place (CLS_LEFT and CLS_RIGHT are one bit
+     * each; the straddlers, CLS_BOTH = 0, are gathered from axis 0's STARTs) */
     bsp_box lcell = cell, rcell = cell;
     lcell.hi.v[axis] = rcell.lo.v[axis] = s;
     node_lists LL = {L.base, L.stride, 0, 0.0}, RL = {L.base, L.stride, 0, 0.0};
@@ -351,7 +366,7 @@ static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
         RL.base = top;
         RL.stride = 2 * (n_ronly + ns);
         free_top = top + 3 * RL.stride;
-        /* + 1: the branch-free loop below stores one event past the last */
+        /* + 1: the branch-free loops below store one event past the last */
         if (!grow_u64(&b->ev, &b->cap, free_top + 1) || !grow_list(b, n + 1))
             return oom(b);
         const uint8_t *cls = b->cls;
@@ -361,16 +376,26 @@ static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
             uint64_t *src = b->ev + L.base + k * L.stride; /* left: in place, a <= i */
             uint64_t *dst = b->ev + RL.base + k * RL.stride;
             size_t a = 0, o = 0;
-            for (size_t i = 0; i < m; i++) {
-                uint64_t x = src[i];
-                uint8_t c = cls[ev_prim(x)];
-                src[a] = x;
-                a += c == CLS_LEFT;
-                dst[o] = x;
-                o += c == CLS_RIGHT;
-                if (k == 0) {
-                    strad[nsg] = ev_prim(x);
+            if (k == 0) {
+                for (size_t i = 0; i < m; i++) {
+                    uint64_t x = src[i];
+                    uint32_t p = ev_prim(x);
+                    unsigned c = cls[p];
+                    src[a] = x;
+                    a += c & CLS_LEFT;
+                    dst[o] = x;
+                    o += c >> 1;
+                    strad[nsg] = p;
                     nsg += (c == CLS_BOTH) & (size_t)((x >> 31) & 1);
+                }
+            } else {
+                for (size_t i = 0; i < m; i++) {
+                    uint64_t x = src[i];
+                    unsigned c = cls[ev_prim(x)];
+                    src[a] = x;
+                    a += c & CLS_LEFT;
+                    dst[o] = x;
+                    o += c >> 1;
                 }
             }
         }
@@ -387,13 +412,20 @@ static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
             for (size_t i = 0; i < ns; i++) {
                 uint32_t p = strad[i];
                 double tp = b->cost ? (double)b->cost[p] : 0.0;
-                if (clipped_events(b, p, &lcell, b->nev[0], stride, 2 * kept[0], &fail)) {
-                    kept[0]++;
-                    tkept[0] += tp;
+                bsp_box cb[2];
+                int got = kd_clip_prim_split(b->scene, p, b->bounds[p], &cell, axis, s, b->t->pad,
+                                             &b->clip, cb);
+                if (got < 0) {
+                    fail = 1;
+                    break;
                 }
-                if (clipped_events(b, p, &rcell, b->nev[1], stride, 2 * kept[1], &fail)) {
-                    kept[1]++;
-                    tkept[1] += tp;
+                const bsp_box *cc[2] = {&lcell, &rcell};
+                for (int c = 0; c < 2; c++) {
+                    if ((got >> c & 1) &&
+                        clipped_events(b, p, &cb[c], cc[c], b->nev[c], stride, 2 * kept[c])) {
+                        kept[c]++;
+                        tkept[c] += tp;
+                    }
                 }
             }
             if (fail)
@@ -518,10 +550,12 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     if (n == 0)
         return BSP_OK; /* the root stays an empty leaf */
 
-    b.cls = calloc(np, 1);
+    b.cls = calloc(np + 1, 1); /* + 1: the spare slot */
+    b.bounds = malloc(np * sizeof *b.bounds);
+    b.spare = (uint32_t)np;
     b.cap = 12 * n + 1024; /* the root's lists and a radix buffer, then room to grow */
     b.ev = malloc(b.cap * sizeof *b.ev);
-    if (!b.cls || !b.ev) {
+    if (!b.cls || !b.ev || !b.bounds) {
         st = oom(&b);
         goto done;
     }
@@ -586,7 +620,11 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
         for (uint32_t p = 0; p < np; p++) {
             if (scene->prims[p].shape == SHAPE_NONE)
                 continue;
-            bsp_box pb = kd_prim_box(t, scene, p);
+            if (k == 0)
+                b.bounds[p] = bsp_scene_prim_bounds(scene, p);
+            bsp_box pb = b.bounds[p]; /* padded as kd_prim_box pads */
+            pb.lo.v[k] -= t->pad;
+            pb.hi.v[k] += t->pad;
             uint64_t cls = b.pclass ? (uint64_t)b.pclass[p] << EV_CLASS_SHIFT : 0;
             e[i++] = make_event(round_down(pb.lo.v[k]), 1, p) | cls;
             e[i++] = make_event(round_up(pb.hi.v[k]), 0, p) | cls;
@@ -605,6 +643,7 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     st = build_node(&b, 0, t->box, root, 3 * m, 0, 0, b.surface, &cost);
 done:
     free(b.cls);
+    free(b.bounds);
     free(b.ev);
     free(b.cost);
     free(b.nev[0]);
