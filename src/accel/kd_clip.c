@@ -135,32 +135,6 @@ static int clip_polygon(const bsp_vec3 *vs, size_t n, bsp_box pb, const bsp_box 
     return result;
 }
 
-/* Bounds of triangle V ∩ G into *B (PB: its unclipped bounds): the convex
- * case, at most 3 + 6 vertices, in fixed buffers. */
-static int clip_triangle(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g, bsp_box *b)
-{
-    bsp_vec3 buf[2][12];
-    const bsp_vec3 *cur = v;
-    size_t n = 3;
-    int o = 0;
-    for (int pl = 0; pl < 6; pl++) {
-        int k = pl >> 1, above = !(pl & 1);
-        double c = above ? g->lo.v[k] : g->hi.v[k];
-        if (above ? !(pb.lo.v[k] < c) : !(pb.hi.v[k] > c))
-            continue;
-        n = clip_plane(cur, n, buf[o], k, c, above);
-        if (n == 0)
-            return 0;
-        cur = buf[o];
-        o ^= 1;
-    }
-    bsp_box r = box_empty();
-    for (size_t i = 0; i < n; i++)
-        r = box_add_point(r, cur[i]);
-    *b = r;
-    return 1;
-}
-
 /* Clips triangle V (bounds PB) to G into OUT[0..*N) (at most 9 vertices):
  * returns 1 when it clipped, 0 with *N = 0 when nothing is left, 0 with
  * *N = 3 when no plane of G crosses PB (V itself is the part). */
@@ -191,6 +165,23 @@ static int clip_triangle_into(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g,
             out[i] = cur[i];
     *np = n;
     return clipped;
+}
+
+/* Bounds of triangle V ∩ G into *B (PB: its unclipped bounds): the convex
+ * case, at most 3 + 6 vertices, in fixed buffers. */
+static int clip_triangle(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g, bsp_box *b)
+{
+    bsp_vec3 part[12];
+    size_t n;
+    int clipped = clip_triangle_into(v, pb, g, part, &n);
+    if (n == 0)
+        return 0;
+    const bsp_vec3 *cur = clipped ? part : v;
+    bsp_box r = box_empty();
+    for (size_t i = 0; i < n; i++)
+        r = box_add_point(r, cur[i]);
+    *b = r;
+    return 1;
 }
 
 /* Clamps the bounds B of a clipped part to the unclipped bounds PB and to G
