@@ -178,7 +178,9 @@ const char build_args_help[] =
     "  --split-to-limits  sah family: split until --max-depth or --leaf-size ends it, even\n"
     "                     where the cost model would make a leaf (the paper's criteria)\n"
     "  --mixed-share F    sah-mixed: share of primary rays among all rays, in (0, 1]\n"
-    "                     (default: measured by a 65 x 65 pre-pass)\n";
+    "                     (default: measured by a 65 x 65 pre-pass)\n"
+    "  --build-threads N  sah family: build threads (default: every core); the tree is\n"
+    "                     the same for any N\n";
 
 int parse_build_arg(args *a, bsp_build_options *opts)
 {
@@ -193,6 +195,8 @@ int parse_build_arg(args *a, bsp_build_options *opts)
         opts->max_leaf_prims = parse_int(a, s, 1, 1 << 20);
     } else if (!strcmp(s, "--split-to-limits")) {
         opts->sah_split_to_limits = 1;
+    } else if (!strcmp(s, "--build-threads")) {
+        opts->threads = parse_int(a, s, 1, 256);
     } else if (!strcmp(s, "--mixed-share")) {
         opts->mixed_primary_share =
             parse_real(a, s, opt_value(a, s), in_share_range, "a number in (0, 1]");

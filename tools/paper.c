@@ -94,7 +94,7 @@ static void print_help(void)
            "                  with the orthographic camera it is built for\n"
            "  --res N         N x N rays (default 513)\n"
            "  --depth N       ray depth (default 4)\n"
-           "  --threads N     render threads (default 1: single-thread times)\n"
+           "  --threads N     build and render threads (default 1: single-thread times)\n"
            "  --validate N    random rays compared with naive before each render (default 5000)\n"
            "  --repeat N      render N times and report the best time (default 1)\n"
            "  --cost-termination  SAH trees also make a leaf where no split pays (bspray's\n"
@@ -129,6 +129,7 @@ static int run_cell(const paper_opts *o, const char *name, const bsp_scene *scen
     bo.max_depth = 18;
     bo.max_leaf_prims = 2;
     bo.sah_split_to_limits = !o->cost_termination;
+    bo.threads = o->threads; /* T_B on as many threads as the render (default 1) */
     if (!o->quiet)
         fprintf(stderr, "%s: %s: %s: building\n", prog, name, r->label);
     bsp_accel *accel = build_accel(scene, &bo);

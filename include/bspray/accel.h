@@ -94,6 +94,8 @@ typedef struct bsp_build_options {
     double mixed_primary_share; /* sah-mixed: primary rays / all rays of the render, in
                                    (0, 1]; 0: measured by a 65 x 65 pre-pass of the Whitted
                                    renderer (depth 4) from the view */
+    int threads;             /* sah family: build threads; 0: every online core. The tree
+                                is the same for any count */
 } bsp_build_options;
 
 void bsp_build_options_defaults(bsp_build_options *opts);

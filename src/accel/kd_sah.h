@@ -99,6 +99,17 @@ static inline float round_up(double x)
 enum { COST_UNIFORM, COST_CLASS, COST_ARRAY };
 #define EV_CLASS_SHIFT 28
 
+/* Subtrees deferred by the main build to be built in parallel
+ * (kd_sah_tasks.c). */
+typedef struct sah_task sah_task;
+typedef struct sah_tasks {
+    sah_task *v;
+    size_t n, cap;
+    size_t min_n, max_n; /* a node of min_n..max_n primitives with no speculative
+                            ancestor becomes a task (independent of the thread count,
+                            so every thread count builds the same array) */
+} sah_tasks;
+
 typedef struct sah_build {
     kd_tree *t;
     const bsp_scene *scene;
@@ -122,6 +133,7 @@ typedef struct sah_build {
                            cls[spare] absorbs the writes of a branch-free loop */
     uint32_t spare;
     bsp_box *bounds;    /* per primitive: bsp_scene_prim_bounds, for clipping */
+    sah_tasks *tasks;   /* the main build's deferred subtrees; NULL inside a task */
     uint64_t *ev;       /* the event stack */
     size_t cap;
     uint64_t *nev[2];   /* new events of straddlers per side, axis j at j * stride */
@@ -130,6 +142,8 @@ typedef struct sah_build {
     size_t list_cap;
     kd_clip_scratch clip;
     bsp_error *err;
+    void *mruns;        /* kd_sweep_measure's scratch, grown on demand */
+    size_t mruns_cap;
 } sah_build;
 
 static inline int grow_u64(uint64_t **p, size_t *cap, size_t need)
@@ -170,6 +184,41 @@ static inline double ev_pos(uint64_t x)
 {
     return (double)key_float((uint32_t)(x >> 32));
 }
+
+/* A node's event lists: axis k at ev[base + k * stride], 2n events each. */
+typedef struct node_lists {
+    size_t base, stride, n;
+    double tsum; /* sum of T_i */
+} node_lists;
+
+/* Builds the subtree of NODE over CELL from the lists L; b->ev[top, ...) is
+ * free (kd_split_sah.c). */
+HIDDEN bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lists L,
+                                    size_t top, int depth, int bad, int surface, double *cost_out);
+
+/* Whether the main build defers a node of N primitives after BAD bad refines
+ * to a task: only with no speculative ancestor, whose retraction would need
+ * the subtree's cost at once. */
+static inline int kd_sah_task_wanted(const sah_build *b, size_t n, int bad)
+{
+    return b->tasks && bad == 0 && n >= b->tasks->min_n && n <= b->tasks->max_n;
+}
+
+/* Defers NODE (lists L, CELL, DEPTH, SURFACE) to a task: copies its lists and
+ * leaves NODE an empty leaf until kd_sah_run_tasks (kd_sah_tasks.c). */
+HIDDEN bsp_status kd_sah_defer(sah_build *b, uint32_t node, const bsp_box *cell,
+                               const node_lists *L, int depth, int surface);
+
+/* Builds the deferred subtrees on THREADS threads (each with scratch of its
+ * own) and splices them into b->t in task order; frees the tasks. THREADS
+ * <= 0: only frees them. */
+HIDDEN bsp_status kd_sah_run_tasks(sah_build *b, int threads);
+
+/* The build threads options O ask for (0: every online core). */
+HIDDEN int kd_build_threads(const bsp_build_options *o);
+
+/* Frees B's scratch (not the shared per-primitive arrays). */
+HIDDEN void kd_sah_scratch_free(sah_build *b);
 
 /* The best plane on axis K of a node (its sorted events E[0..M), N
  * primitives, cost sum TSUM, cell CELL, 1 / its measure INV_AREA — halved

@@ -194,12 +194,6 @@ static double measure(const sah_build *b, const bsp_box *box, int surface)
 
 /* --- nodes ---------------------------------------------------------------------------------- */
 
-/* A node's event lists: axis k at ev[base + k * stride], 2n events each. */
-typedef struct node_lists {
-    size_t base, stride, n;
-    double tsum; /* sum of T_i */
-} node_lists;
-
 /* kd_make_leaf, except that an empty leaf is written directly: with no
  * primitive stored yet kd_make_leaf would memcpy from/to NULL (0 bytes, but
  * undefined behaviour). */
@@ -265,7 +259,7 @@ static void merge_back(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn)
  * behind the eye — and the ratio child/node is then undefined; such a cell
  * and its subtree are built by the plain surface area instead, so that the
  * secondary and shadow rays that do reach it find a good tree. */
-static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lists L, size_t top,
+bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lists L, size_t top,
                              int depth, int bad, int surface, double *cost_out)
 {
     kd_tree *t = b->t;
@@ -274,6 +268,8 @@ static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     *cost_out = tsum;
     if (n <= (size_t)t->max_leaf_prims || depth >= t->max_depth)
         return make_leaf(b, node, b->ev + L.base, n);
+    if (kd_sah_task_wanted(b, n, bad))
+        return kd_sah_defer(b, node, &cell, &L, depth, surface); /* built later, in parallel */
     double area = measure(b, &cell, surface);
     if (!surface && !(area > 0.0)) {
         surface = 1;
@@ -457,9 +453,9 @@ static bsp_status build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     size_t saved_prims = t->nprims;
     double cl, cr;
     bsp_status st =
-        build_node(b, child, lcell, LL, free_top, depth + 1, bad + bad_here, surface, &cl);
+        kd_sah_build_node(b, child, lcell, LL, free_top, depth + 1, bad + bad_here, surface, &cl);
     if (st == BSP_OK)
-        st = build_node(b, child + 1, rcell, RL, free_top, depth + 1, bad + bad_here, surface, &cr);
+        st = kd_sah_build_node(b, child + 1, rcell, RL, free_top, depth + 1, bad + bad_here, surface, &cr);
     if (st != BSP_OK)
         return st;
     double ml = measure(b, &lcell, surface), mr = measure(b, &rcell, surface), save = 0.0;
@@ -640,19 +636,44 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
         }
     b.linear = !b.mailbox || tmin >= b.mb_hit;
     node_lists root = {0, m, n, tsum};
-    st = build_node(&b, 0, t->box, root, 3 * m, 0, 0, b.surface, &cost);
+    /* subtrees of n/64 (at least 512) primitives and down to an eighth of that
+     * are built as tasks, on the threads asked for */
+    sah_tasks tasks;
+    memset(&tasks, 0, sizeof tasks);
+    tasks.max_n = n / 64 > 512 ? n / 64 : 512;
+    tasks.min_n = tasks.max_n / 8;
+    b.tasks = &tasks;
+    st = kd_sah_build_node(&b, 0, t->box, root, 3 * m, 0, 0, b.surface, &cost);
+    /* the tasks get scratch of their own: the main build's is not needed now */
+    kd_sah_scratch_free(&b);
+    bsp_status rt = kd_sah_run_tasks(&b, st == BSP_OK ? kd_build_threads(o) : 0);
+    if (st == BSP_OK)
+        st = rt;
 done:
-    free(b.cls);
+    kd_sah_scratch_free(&b);
     free(b.bounds);
-    free(b.ev);
     free(b.cost);
-    free(b.nev[0]);
-    free(b.nev[1]);
-    free(b.list);
     free(b.pclass);
-    free(b.chunks);
-    kd_clip_scratch_free(&b.clip);
     return st;
+}
+
+void kd_sah_scratch_free(sah_build *b)
+{
+    free(b->cls);
+    free(b->ev);
+    free(b->nev[0]);
+    free(b->nev[1]);
+    free(b->list);
+    free(b->chunks);
+    free(b->mruns);
+    kd_clip_scratch_free(&b->clip);
+    b->cls = NULL;
+    b->ev = NULL;
+    b->nev[0] = b->nev[1] = NULL;
+    b->list = NULL;
+    b->chunks = NULL;
+    b->mruns = NULL;
+    b->cap = b->nev_cap = b->list_cap = b->chunks_cap = b->mruns_cap = 0;
 }
 
 bsp_status kd_build_sah(kd_tree *t, const bsp_scene *scene, const bsp_build_options *o,

@@ -63,13 +63,13 @@ uint32_t kd_alloc_pair(kd_tree *t)
     return i;
 }
 
-int kd_make_leaf(kd_tree *t, uint32_t i, const uint32_t *prims, size_t n)
+int kd_reserve_prims(kd_tree *t, size_t more)
 {
-    if (n >= ((size_t)1 << 30) || t->nprims + n > UINT32_MAX)
+    if (t->nprims + more > UINT32_MAX)
         return 0;
-    if (t->nprims + n > t->cap_prims) {
+    if (t->nprims + more > t->cap_prims) {
         size_t ncap = t->cap_prims ? t->cap_prims : 1024;
-        while (ncap < t->nprims + n)
+        while (ncap < t->nprims + more)
             ncap *= 2;
         uint32_t *np = realloc(t->prims, ncap * sizeof *np);
         if (!np)
@@ -77,6 +77,13 @@ int kd_make_leaf(kd_tree *t, uint32_t i, const uint32_t *prims, size_t n)
         t->prims = np;
         t->cap_prims = ncap;
     }
+    return 1;
+}
+
+int kd_make_leaf(kd_tree *t, uint32_t i, const uint32_t *prims, size_t n)
+{
+    if (n >= ((size_t)1 << 30) || !kd_reserve_prims(t, n))
+        return 0;
     if (n > 0) /* prims may be NULL for an empty leaf */
         memcpy(t->prims + t->nprims, prims, n * sizeof *prims);
     t->nodes[i].u.first = (uint32_t)t->nprims;

@@ -5,8 +5,10 @@
  * Node layout (Havran's cache-sensitive representation, as pbrt and Mitsuba
  * also use it): 8 bytes per node in one array; the two children of an
  * interior node are adjacent (left at `child`, right at `child + 1`), and
- * the whole array is in depth-first order from the root at index 0. A leaf's
- * primitives are a run in one shared index array.
+ * the array is in depth-first order from the root at index 0 — for SAH
+ * trees, the top of the tree and then each subtree built in parallel
+ * (kd_sah_tasks.c), each in depth-first order. A leaf's primitives are a
+ * run in one shared index array.
  *
  * Conservative assignment invariant (what exactness rests on): a primitive
  * is listed in every leaf whose box overlaps the interior of its bounds
@@ -80,6 +82,9 @@ typedef struct kd_tree {
 /* Appends two adjacent nodes and returns the index of the first, or
  * UINT32_MAX when out of memory or past KD_MAX_NODES. */
 HIDDEN uint32_t kd_alloc_pair(kd_tree *t);
+/* Room for MORE entries in the leaf index array; 0 when out of memory or
+ * past 2^32 entries. */
+HIDDEN int kd_reserve_prims(kd_tree *t, size_t more);
 /* Makes node I a leaf listing PRIMS[0..N). Returns 0 when out of memory. */
 HIDDEN int kd_make_leaf(kd_tree *t, uint32_t i, const uint32_t *prims, size_t n);
 /* Makes node I interior with children at CHILD, CHILD + 1. */
