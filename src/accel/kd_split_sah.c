@@ -332,7 +332,7 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
             cls[ev_prim(x)] = start ? CLS_BOTH : CLS_LEFT;
             n_lonly += start ^ 1;
             if (mode != COST_UNIFORM)
-                t_lonly += start ? 0.0 : ev_cost(b, x, mode);
+                t_lonly += ev_cost(b, x, mode) * (double)(start ^ 1); /* not a branch */
         }
         for (size_t i = split_i; i < m; i++) {
             uint64_t x = e[i];
@@ -340,7 +340,7 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
             cls[start ? ev_prim(x) : spare] = CLS_RIGHT;
             n_ronly += start;
             if (mode != COST_UNIFORM)
-                t_ronly += start ? ev_cost(b, x, mode) : 0.0;
+                t_ronly += ev_cost(b, x, mode) * (double)start;
         }
     }
     const size_t ns = n - n_lonly - n_ronly;

@@ -74,12 +74,12 @@ lin_run(const sah_build *b, const lin_axis *ax, const lin_model *lm, size_t from
         uint64_t x = e[i];
         int start = (int)((x >> 31) & 1);
         double t = ev_t(b, x, mode);
-        double ts = start ? t : 0.0, te = start ? 0.0 : t;
+        double ts = t * (double)start, te = t - ts; /* arithmetic, not a branch */
         tr -= te;
         double p = ev_pos(x);
         double w;
         if (mailbox && mode != COST_UNIFORM) {
-            mc -= start ? 0.0 : 1.0;
+            mc -= (double)(start ^ 1);
             w = mbw * mc;
         } else {
             w = mailbox ? mbw * (tl + tr) : tl + tr;
@@ -89,7 +89,7 @@ lin_run(const sah_build *b, const lin_axis *ax, const lin_model *lm, size_t from
         best = g < best ? g : best;
         tl += ts;
         if (mailbox && mode != COST_UNIFORM)
-            mc += start ? 1.0 : 0.0;
+            mc += (double)start;
     }
     st->tl = tl;
     st->tr = tr;
@@ -219,9 +219,11 @@ lin_node(sah_build *b, const uint64_t *ev, size_t stride, size_t n, double tsum,
                     uint64_t x = A->e[i];
                     int start = (int)((x >> 31) & 1);
                     double t = ev_t(b, x, mode);
-                    ts += start ? t : 0.0;
-                    te += start ? 0.0 : t;
-                    ns += start ? 1.0 : 0.0;
+                    /* arithmetic, not a branch: START or END is unpredictable */
+                    double sf = (double)start, tsx = t * sf;
+                    ts += tsx;
+                    te += t - tsx;
+                    ns += sf;
                 }
                 double ne = (double)(to - from) - ns;
                 c[j].tl = st.tl;
