@@ -41,24 +41,31 @@ void kd_clip_scratch_free(kd_clip_scratch *scr)
 }
 
 /* Clips the closed polygon IN[0..N) to x[k] >= c (ABOVE) or x[k] <= c;
- * writes at most 2N vertices to OUT and returns their count. */
+ * writes at most 2N vertices to OUT and returns their count. Coordinates are
+ * kept in locals and written whole (writing one component of a vertex just
+ * copied through memory stalls the next read of it). */
 static size_t clip_plane(const bsp_vec3 *in, size_t n, bsp_vec3 *out, int k, double c, int above)
 {
     size_t m = 0;
-    bsp_vec3 a = in[n - 1];
-    double da = above ? a.v[k] - c : c - a.v[k];
+    const double sgn = above ? 1.0 : -1.0; /* c - x = -(x - c) exactly */
+    double ax = in[n - 1].x, ay = in[n - 1].y, az = in[n - 1].z;
+    double da = sgn * (in[n - 1].v[k] - c);
     for (size_t i = 0; i < n; i++) {
-        bsp_vec3 b = in[i];
-        double db = above ? b.v[k] - c : c - b.v[k];
+        double bx = in[i].x, by = in[i].y, bz = in[i].z;
+        double db = sgn * (in[i].v[k] - c);
         if ((da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0)) {
             double t = da / (da - db); /* in [0, 1] up to rounding */
-            bsp_vec3 p = v3_madd(a, v3_sub(b, a), t);
-            p.v[k] = c;
-            out[m++] = p;
+            double px = ax + (bx - ax) * t, py = ay + (by - ay) * t, pz = az + (bz - az) * t;
+            px = k == 0 ? c : px;
+            py = k == 1 ? c : py;
+            pz = k == 2 ? c : pz;
+            out[m++] = bsp_v3(px, py, pz);
         }
         if (db >= 0.0)
-            out[m++] = b;
-        a = b;
+            out[m++] = bsp_v3(bx, by, bz);
+        ax = bx;
+        ay = by;
+        az = bz;
         da = db;
     }
     return m;
