@@ -482,6 +482,9 @@ static bsp_ray random_ray(bsp_box box)
             r.dir.v[k] = k == axis ? (rnd() < 0.5 ? -1.0 : 1.0) : 0.0;
     } else if (v < 0.30) { /* one zero component */
         r.dir.v[(int)(rnd() * 3) % 3] = 0.0;
+    } else if (v < 0.35) { /* one tiny component: subnormal (1/d overflows) or near it */
+        double tiny = rnd() < 0.5 ? 5e-321 : 1e-300;
+        r.dir.v[(int)(rnd() * 3) % 3] = rnd() < 0.5 ? -tiny : tiny;
     }
     r.tmin = 0.0;
     r.tmax = INFINITY;
@@ -922,6 +925,65 @@ TEST(sah_clip_is_conservative_and_tight)
     CHECK(out.lo.v[2] >= -3e-6 && out.hi.v[2] <= 3e-6);
     bsp_scene_destroy(s);
     kd_clip_scratch_free(&scr);
+}
+
+/* Rays with subnormal direction components crossing a plane at 0 from an
+ * origin a subnormal distance away: the traversal's reciprocal 1 / d
+ * overflows there (kd_traverse.c falls back to the quotient). Kaplan's
+ * median of a symmetric scene splits at exactly 0 (and SAH trees get the
+ * same rays); every answer must be the naive one. (Without the fallback
+ * these rays happened to agree too: an infinite exit t only makes the
+ * traversal stop at the first hit it finds, which here was the closest.) */
+TEST(kd_exact_subnormal_directions)
+{
+    bsp_scene *s = bsp_scene_create();
+    rng_state = 919;
+    for (int i = 0; i < 200; i++) {
+        bsp_vec3 c = bsp_v3(rnd_in(-4, 4), rnd_in(-4, 4), rnd_in(-4, 4));
+        add_sphere(s, c, rnd_in(0.05, 0.6));
+        add_sphere(s, v3_scale(c, -1.0), rnd_in(0.05, 0.6)); /* symmetric bounds */
+    }
+    add_tri(s, bsp_v3(0, -3, -3), bsp_v3(0, 3, -3), bsp_v3(0, 0, 3)); /* in the plane x = 0 */
+    bsp_build_options kinds[2];
+    bsp_build_options_defaults(&kinds[0]);
+    kinds[0].kind = BSP_ACCEL_KAPLAN;
+    kinds[1] = sah_options();
+    bsp_build_options nv;
+    bsp_build_options_defaults(&nv);
+    nv.kind = BSP_ACCEL_NAIVE;
+    bsp_accel *naive = build(s, &nv);
+    bsp_query *qn = bsp_query_create(naive);
+    int mismatches = 0, hits = 0;
+    for (int kd = 0; kd < 2; kd++) {
+        bsp_accel *acc = build(s, &kinds[kd]);
+        bsp_query *q = bsp_query_create(acc);
+        for (int i = 0; i < 20000; i++) {
+            bsp_ray r;
+            int axis = i % 3;
+            for (int k = 0; k < 3; k++) {
+                r.org.v[k] = rnd_in(-6, 6);
+                r.dir.v[k] = rnd_in(-1, 1);
+            }
+            double tiny = (i / 3) % 2 ? 5e-321 : 3e-310;
+            r.org.v[axis] = (rnd() < 0.5 ? -1 : 1) * tiny * rnd_in(0, 3);
+            r.dir.v[axis] = (rnd() < 0.5 ? -1 : 1) * tiny;
+            r.tmin = 0.0;
+            r.tmax = INFINITY;
+            bsp_hit h1, h2;
+            int f1 = bsp_intersect(naive, qn, &r, &h1), f2 = bsp_intersect(acc, q, &r, &h2);
+            hits += f1;
+            if (!same_hit(f1, &h1, f2, &h2) ||
+                bsp_occluded(naive, qn, &r) != bsp_occluded(acc, q, &r))
+                mismatches++;
+        }
+        bsp_query_destroy(q);
+        bsp_accel_destroy(acc);
+    }
+    CHECK_MSG(mismatches == 0, "%d of 40000 rays differ from naive", mismatches);
+    CHECK(hits > 1000);
+    bsp_query_destroy(qn);
+    bsp_accel_destroy(naive);
+    bsp_scene_destroy(s);
 }
 
 /* Clipping a straddler once for both children (kd_clip_prim_split) gives

@@ -3,13 +3,19 @@
  * Kopal, Bittner, Zara: "Fast robust BSP tree traversal algorithm for ray
  * tracing", JGT 1998), for closest-hit and any-hit queries.
  *
- * The ray's segment inside the current node is described by an entry and an
- * exit point on a fixed stack. An interior node is classified by comparing
- * the coordinates of those points with the splitting plane — never by a t
+ * The ray's segment inside the current node is described by an entry point
+ * and an exit point; the exit points of the cells still to visit form a
+ * stack (the top is the current cell's exit), the entry point is a copy of
+ * the last exit popped. An interior node is classified by comparing the
+ * coordinates of those points with the splitting plane — never by a t
  * value — so rays parallel to a plane, lying in it, starting on it, or with
- * zero direction components need no epsilon and never divide by zero: t is
- * computed only when the two points lie strictly on opposite sides, where
- * d[axis] cannot be 0.
+ * zero direction components need no epsilon: t is computed only when the
+ * two points lie strictly on opposite sides, where d[axis] cannot be 0.
+ * That t is (s - o) * (1 / d) with the reciprocal taken once per ray, not
+ * the quotient (s - o) / d: it may differ from the quotient by an ulp or
+ * two, far below the padding (kd_tree.h), and it never becomes the t of a
+ * hit — those come from the shape kernels alone. (A subnormal d makes 1 / d
+ * infinite: such a push falls back to the quotient.)
  *
  * Closest hit: every primitive of a visited leaf is tested on the original
  * ray, with tmax lowered to the best hit so far, so each t is the very value
@@ -18,11 +24,14 @@
  * naive method. The padded assignment (kd_tree.h) makes this exact.
  *
  * Speed (primary rays spend most of their time here, not in the shape
- * tests): the descent is one inlined loop over node pointers with the stack
- * addressed by pointers; the shape kernels (geom/isect.h) are inlined into
- * the leaf loop and see dot(dir, dir) computed once per ray; a hit keeps only
- * t and, for triangles, the unnormalised barycentrics, and u, v are divided
- * out once for the final hit. Counters are kept in locals and derived where
+ * tests): the descent is one inlined loop over node pointers; its branches
+ * are kept (coherent rays predict them well, and a branch-free selection
+ * puts the loads and compares on the loop-carried path: measured 1.3-2x
+ * slower); a push computes no quotient and stores only the point, its t and
+ * the far child; the shape kernels (geom/isect.h) are inlined into the leaf
+ * loop and see dot(dir, dir) computed once per ray; a hit keeps only t and,
+ * for triangles, the unnormalised barycentrics, and u, v are divided out
+ * once for the final hit. Counters are kept in locals and derived where
  * possible (mailbox hits = entries met - tests, empty leaves = leaves -
  * non-empty leaves).
  */
@@ -31,23 +40,42 @@
 #include "accel/kd_tree.h"
 #include "geom/vec.h"
 
-/* entry + exit + one push per level, with room to spare */
+/* root exit + one push per level, with room to spare */
 #define KD_STACK_SIZE (BSP_KD_MAX_DEPTH_LIMIT + 4)
 
-typedef struct stack_entry {
-    double pb[3];             /* the point */
-    double t;                 /* ray parameter of the point */
-    const kd_node *node;      /* the far child to visit after this point, or NULL */
-    struct stack_entry *prev; /* the previous exit point */
-} stack_entry;
+/* An exit point: where the ray leaves the current cell, and the far child
+ * whose cell it enters there (NULL for the exit of the root box). */
+typedef struct exit_point {
+    double pb[3];        /* the point */
+    double t;            /* ray parameter of the point */
+    const kd_node *node; /* the far child to visit after this point, or NULL */
+} exit_point;
 
-/* Clips the interval [*A, *B] to the slab LO <= o + t d <= HI; 0 when the
- * ray is parallel to the slab and outside it. */
-static inline int clip_slab(double o, double d, double lo, double hi, double *a, double *b)
+/* The ray as the traversal sees it: origin, direction and its reciprocal. */
+typedef struct trav_ray {
+    double o[3], d[3], inv[3];
+} trav_ray;
+
+static inline void trav_ray_init(trav_ray *r, const bsp_ray *ray)
+{
+    r->o[0] = ray->org.x;
+    r->o[1] = ray->org.y;
+    r->o[2] = ray->org.z;
+    r->d[0] = ray->dir.x;
+    r->d[1] = ray->dir.y;
+    r->d[2] = ray->dir.z;
+    r->inv[0] = 1.0 / ray->dir.x;
+    r->inv[1] = 1.0 / ray->dir.y;
+    r->inv[2] = 1.0 / ray->dir.z;
+}
+
+/* Clips the interval [*A, *B] to the slab LO <= o + t d <= HI (INV = 1 / d);
+ * 0 when the ray is parallel to the slab and outside it. */
+static inline int clip_slab(double o, double d, double inv, double lo, double hi, double *a,
+                            double *b)
 {
     if (d == 0.0)
         return !(o < lo || o > hi);
-    double inv = 1.0 / d;
     double ta = (lo - o) * inv, tb = (hi - o) * inv;
     if (ta > tb) {
         double x = ta;
@@ -61,30 +89,24 @@ static inline int clip_slab(double o, double d, double lo, double hi, double *a,
     return 1;
 }
 
-/* Sets up the entry and exit points of RAY's segment inside the root box
- * (STACK[0], STACK[1]); returns 0 when they do not meet. Zero direction
- * components are handled by the origin test alone. */
-static inline int start(const kd_tree *t, const bsp_ray *ray, stack_entry *stack)
+/* Sets up the entry point EN and the exit point EX (node NULL) of RAY's
+ * segment inside the root box; returns 0 when they do not meet. Zero
+ * direction components are handled by the origin test alone. */
+static inline int start(const kd_tree *t, const bsp_ray *ray, const trav_ray *r, double *en,
+                        exit_point *ex)
 {
     const bsp_box *box = &t->box;
-    const bsp_vec3 o = ray->org, d = ray->dir;
     double a = ray->tmin, b = ray->tmax;
-    if (box_is_empty(*box) || !clip_slab(o.x, d.x, box->lo.x, box->hi.x, &a, &b) ||
-        !clip_slab(o.y, d.y, box->lo.y, box->hi.y, &a, &b) ||
-        !clip_slab(o.z, d.z, box->lo.z, box->hi.z, &a, &b) || !(a <= b))
+    if (box_is_empty(*box) || !clip_slab(r->o[0], r->d[0], r->inv[0], box->lo.x, box->hi.x, &a, &b) ||
+        !clip_slab(r->o[1], r->d[1], r->inv[1], box->lo.y, box->hi.y, &a, &b) ||
+        !clip_slab(r->o[2], r->d[2], r->inv[2], box->lo.z, box->hi.z, &a, &b) || !(a <= b))
         return 0;
-    stack[0].pb[0] = o.x + d.x * a;
-    stack[0].pb[1] = o.y + d.y * a;
-    stack[0].pb[2] = o.z + d.z * a;
-    stack[0].t = a;
-    stack[0].node = NULL;
-    stack[0].prev = stack;
-    stack[1].pb[0] = o.x + d.x * b;
-    stack[1].pb[1] = o.y + d.y * b;
-    stack[1].pb[2] = o.z + d.z * b;
-    stack[1].t = b;
-    stack[1].node = NULL;
-    stack[1].prev = stack;
+    for (int k = 0; k < 3; k++) {
+        en[k] = r->o[k] + r->d[k] * a;
+        ex->pb[k] = r->o[k] + r->d[k] * b;
+    }
+    ex->t = b;
+    ex->node = NULL;
     return 1;
 }
 
@@ -102,20 +124,22 @@ static inline uint32_t mailbox_next(bsp_query *q, size_t nprims)
 }
 
 /* Descends from N to a leaf between the entry point EN and the exit point
- * *EX, pushing the far children and counting interior nodes in *STEPS;
- * returns the leaf. */
+ * *EX (the top of the stack), pushing the far children and counting interior
+ * nodes in *STEPS; returns the leaf. */
 static inline __attribute__((always_inline)) const kd_node *
-descend(const kd_node *nodes, const kd_node *n, const bsp_ray *ray, const stack_entry *en,
-        stack_entry **ex_io, uint64_t *steps)
+descend(const kd_node *nodes, const kd_node *n, const trav_ray *r, const double *en,
+        exit_point **ex_io, uint64_t *steps)
 {
-    stack_entry *ex = *ex_io;
+    exit_point *ex = *ex_io;
     uint32_t bits;
+    uint64_t k = 0;
     while (((bits = n->bits) & 3u) != KD_LEAF_TAG) {
-        ++*steps;
+        k++;
         unsigned axis = bits & 3u;
         double s = (double)n->u.split;
-        double A = en->pb[axis], B = ex->pb[axis];
-        const kd_node *left = nodes + (bits >> 2), *near_c, *far_c;
+        double A = en[axis], B = ex->pb[axis];
+        const kd_node *left = nodes + (bits >> 2);
+        const kd_node *near_c, *far_c;
         if (A <= s) {
             if (B <= s) { /* N1, N2, N3, P5, Z2, Z3: the left side only */
                 n = left;
@@ -136,19 +160,19 @@ descend(const kd_node *nodes, const kd_node *n, const bsp_ray *ray, const stack_
             far_c = left;
         }
         /* A and B lie strictly on opposite sides: d[axis] != 0 */
-        double tp = (s - ray->org.v[axis]) / ray->dir.v[axis];
-        stack_entry *prev = ex++;
-        if (ex == en)
-            ex++;
-        ex->prev = prev;
+        double tp = (s - r->o[axis]) * r->inv[axis];
+        if (__builtin_expect(!(fabs(tp) < INFINITY), 0))
+            tp = (s - r->o[axis]) / r->d[axis]; /* a subnormal d: 1 / d overflowed */
+        ex++;
         ex->t = tp;
         ex->node = far_c;
-        ex->pb[0] = ray->org.x + ray->dir.x * tp;
-        ex->pb[1] = ray->org.y + ray->dir.y * tp;
-        ex->pb[2] = ray->org.z + ray->dir.z * tp;
+        ex->pb[0] = r->o[0] + r->d[0] * tp;
+        ex->pb[1] = r->o[1] + r->d[1] * tp;
+        ex->pb[2] = r->o[2] + r->d[2] * tp;
         ex->pb[axis] = s;
         n = near_c;
     }
+    *steps += k;
     *ex_io = ex;
     return n;
 }
@@ -169,9 +193,12 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
 {
     const kd_tree *t = a->impl;
     const bsp_scene *s = a->scene;
-    stack_entry stack[KD_STACK_SIZE];
+    exit_point stack[KD_STACK_SIZE];
+    double en[3];
+    trav_ray tr;
     hit->prim = BSP_NO_PRIM;
-    if (!start(t, ray, stack))
+    trav_ray_init(&tr, ray);
+    if (!start(t, ray, &tr, en, stack))
         return 0;
     uint32_t stamp = mailbox_next(q, s->nprims);
     uint32_t *mbox = q->stamp;
@@ -186,9 +213,9 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
     uint64_t interior = 0, leaves = 0, nonempty = 0, refs = 0, tests = 0;
     const kd_node *nodes = t->nodes, *n = nodes;
     const uint32_t *prims = t->prims;
-    stack_entry *en = stack, *ex = stack + 1;
+    exit_point *ex = stack;
     for (;;) {
-        n = descend(nodes, n, ray, en, &ex, &interior);
+        n = descend(nodes, n, &tr, en, &ex, &interior);
         uint32_t cnt = n->bits >> 2;
         leaves++;
         if (cnt) {
@@ -210,13 +237,15 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
                 }
             } while (list != end);
         }
-        if (best_p != BSP_NO_PRIM && best.t <= ex->t)
-            break; /* the closest hit lies inside this cell */
-        en = ex;
+        if (best.t <= ex->t)
+            break; /* the closest hit lies inside this cell (best.t is inf without one) */
         n = ex->node;
         if (!n)
             break;
-        ex = en->prev;
+        en[0] = ex->pb[0];
+        en[1] = ex->pb[1];
+        en[2] = ex->pb[2];
+        ex--;
     }
     count(q, interior, leaves, nonempty, refs, tests);
     if (best_p == BSP_NO_PRIM)
@@ -229,8 +258,11 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
 {
     const kd_tree *t = a->impl;
     const bsp_scene *s = a->scene;
-    stack_entry stack[KD_STACK_SIZE];
-    if (!start(t, ray, stack))
+    exit_point stack[KD_STACK_SIZE];
+    double en[3];
+    trav_ray tr;
+    trav_ray_init(&tr, ray);
+    if (!start(t, ray, &tr, en, stack))
         return 0;
     uint32_t stamp = mailbox_next(q, s->nprims);
     uint32_t *mbox = q->stamp;
@@ -242,9 +274,9 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
     uint64_t interior = 0, leaves = 0, nonempty = 0, refs = 0, tests = 0;
     const kd_node *nodes = t->nodes, *n = nodes;
     const uint32_t *prims = t->prims;
-    stack_entry *en = stack, *ex = stack + 1;
+    exit_point *ex = stack;
     for (;;) {
-        n = descend(nodes, n, ray, en, &ex, &interior);
+        n = descend(nodes, n, &tr, en, &ex, &interior);
         uint32_t cnt = n->bits >> 2;
         leaves++;
         if (cnt) {
@@ -267,11 +299,13 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
             if (found)
                 break;
         }
-        en = ex;
         n = ex->node;
         if (!n)
             break;
-        ex = en->prev;
+        en[0] = ex->pb[0];
+        en[1] = ex->pb[1];
+        en[2] = ex->pb[2];
+        ex--;
     }
     count(q, interior, leaves, nonempty, refs, tests);
     return found;
