@@ -303,3 +303,271 @@ TEST(view_mixed_prepass_share)
     CHECK_STR_CONTAINS(err.message, "share");
     bsp_scene_destroy(s);
 }
+
+/* --- the pruned sweep ---------------------------------------------------------------------- */
+
+#include "accel/kd_sah.h"
+
+static double rng_unit(uint64_t *s)
+{
+    *s ^= *s << 13;
+    *s ^= *s >> 7;
+    *s ^= *s << 17;
+    return (double)(*s >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static double rng_in(uint64_t *s, double a, double b)
+{
+    return a + (b - a) * rng_unit(s);
+}
+
+/* A random view: eye in [-5, 5]^3, any direction, viewport half sizes
+ * 0.1..1.5 (PAR: x5). */
+static kd_view random_view(uint64_t *rng, int ortho)
+{
+    kd_view v;
+    memset(&v, 0, sizeof v);
+    v.ortho = ortho;
+    for (int k = 0; k < 3; k++)
+        v.eye.v[k] = rng_in(rng, -5, 5);
+    bsp_vec3 f;
+    for (int k = 0; k < 3; k++)
+        f.v[k] = rng_in(rng, -1, 1);
+    if (rng_unit(rng) < 0.2)
+        f = bsp_v3(0, 0, 1);
+    v.fwd = v3_normalize(f);
+    bsp_vec3 up = fabs(v.fwd.z) > 0.9 ? bsp_v3(0, 1, 0) : bsp_v3(0, 0, 1);
+    v.right = v3_normalize(v3_cross(v.fwd, up));
+    v.up = v3_cross(v.right, v.fwd);
+    v.hx = rng_in(rng, 0.1, 1.5) * (ortho ? 5.0 : 1.0);
+    v.hy = v.hx * rng_in(rng, 0.5, 1.5);
+    return v;
+}
+
+/* A random cell of size 10^-4..10: around the eye, next to it (straddling
+ * the eye plane), or anywhere. */
+static bsp_box random_cell(uint64_t *rng, const kd_view *v)
+{
+    double size = pow(10.0, rng_in(rng, -4, 1)), u = rng_unit(rng);
+    bsp_box b;
+    for (int k = 0; k < 3; k++) {
+        double w = size * rng_in(rng, 0.05, 1.0);
+        double c = u < 0.3   ? v->eye.v[k] + rng_in(rng, -0.4, 0.4) * w
+                   : u < 0.6 ? v->eye.v[k] + rng_in(rng, -2, 2) * w
+                             : rng_in(rng, -10, 10);
+        b.lo.v[k] = c - 0.5 * w;
+        b.hi.v[k] = c + 0.5 * w;
+    }
+    return b;
+}
+
+/* The measures of the sweep (PER, PAR, mixed) are monotone under inclusion
+ * and the children of a split cover their node, up to the error bound of
+ * kd_view_measure_noise (positions next to the eye excepted): what the
+ * pruned sweep relies on. Boxes containing the eye have the whole viewport. */
+TEST(view_measures_monotone_and_covering_within_their_noise)
+{
+    uint64_t rng = 0x9e3779b97f4a7c15u;
+    long tested = 0, failures = 0, unbounded = 0;
+    char first[400] = "";
+    for (int vi = 0; vi < 600; vi++) {
+        int kind = vi % 3; /* PER, PAR, mixed */
+        kd_mixed_measure mm;
+        mm.view = random_view(&rng, kind == 1);
+        mm.w_view = rng_in(&rng, 0.05, 1.0) / (4.0 * mm.view.hx * mm.view.hy);
+        mm.w_surf = rng_in(&rng, 0.0, 1.0) / 100.0;
+        kd_area_fn f = kind == 2 ? kd_mixed_area : kd_view_area;
+        const void *ctx = kind == 2 ? (const void *)&mm : (const void *)&mm.view;
+        for (int bi = 0; bi < 300; bi++) {
+            bsp_box cell = random_cell(&rng, &mm.view);
+            unsigned k = (unsigned)bi % 3;
+            double zone[2];
+            double noise = kd_view_measure_noise(f, ctx, &cell, k, zone);
+            if (!(noise < INFINITY)) {
+                unbounded++;
+                continue;
+            }
+            double lo = cell.lo.v[k], hi = cell.hi.v[k];
+            double p = lo + (hi - lo) * rng_unit(&rng), q = lo + (p - lo) * rng_unit(&rng);
+            if (rng_unit(&rng) < 0.2) /* a plane close to the eye */
+                p = mm.view.eye.v[k] + (hi - lo) * pow(10.0, rng_in(&rng, -12, -2)) *
+                                           (rng_unit(&rng) < 0.5 ? -1 : 1);
+            if (!(p > lo && p < hi && q > lo && q <= p) || (p >= zone[0] && p <= zone[1]) ||
+                (q >= zone[0] && q <= zone[1]))
+                continue;
+            bsp_box l = cell, r = cell, lq = cell, rq = cell;
+            l.hi.v[k] = p, r.lo.v[k] = p, lq.hi.v[k] = q, rq.lo.v[k] = q;
+            double a = f(&cell, ctx), al = f(&l, ctx), ar = f(&r, ctx);
+            double alq = f(&lq, ctx), arq = f(&rq, ctx);
+            tested++;
+            int ok = alq <= al + noise && ar <= arq + noise && al <= a + noise &&
+                     ar <= a + noise && al + ar >= a - noise;
+            int eye_in_l = 1;
+            for (int j = 0; j < 3; j++)
+                eye_in_l &= mm.view.eye.v[j] >= l.lo.v[j] && mm.view.eye.v[j] <= l.hi.v[j];
+            if (kind == 0 && eye_in_l)
+                ok &= al == 4.0 * mm.view.hx * mm.view.hy && a == al; /* contains the eye */
+            if (!ok && failures++ == 0)
+                snprintf(first, sizeof first,
+                         "kind %d axis %u p %.17g q %.17g: A %.17g al %.17g ar %.17g "
+                         "al(q) %.17g ar(q) %.17g noise %.3g",
+                         kind, k, p, q, a, al, ar, alq, arq, noise);
+        }
+    }
+    CHECK_MSG(failures == 0, "%ld of %ld violate the bound; first: %s", failures, tested, first);
+    CHECK(tested > 100000);
+    CHECK(unbounded < tested / 100); /* no bound only with a cell face at the eye */
+}
+
+/* The full sweep of the original builder (every candidate evaluated in
+ * order, strict comparisons): the reference of the pruned one. */
+static void full_sweep(const sah_build *b, const uint64_t *e, size_t m, unsigned k,
+                       const bsp_box *cell, double inv_area, double tsum, size_t n,
+                       split_choice *best)
+{
+    const int mode = b->cost_mode, mailbox = b->mailbox;
+    const double lo = cell->lo.v[k], hi = cell->hi.v[k];
+    const double ctrav = b->ctrav, bonus = b->bonus_mul, unif_inv = b->unif * inv_area;
+    const double anode = 1.0 / inv_area, mb_hit = b->mb_hit;
+    const double unif_save = b->unif > mb_hit ? 1.0 - mb_hit / b->unif : 0.0;
+    bsp_box lb = *cell, rb = *cell;
+    double tl = 0.0, tr = tsum, best_cost = best->cost;
+    size_t nl = 0, nr = n, best_i = SIZE_MAX, i = 0;
+    for (; i < m; i++) {
+        uint64_t x = e[i];
+        if (ev_pos(x) > lo)
+            break;
+        size_t start = (size_t)(x >> 31) & 1;
+        nr -= start ^ 1;
+        nl += start;
+        if (mode != COST_UNIFORM) {
+            double t = ev_cost(b, x, mode);
+            tr -= start ? 0.0 : t;
+            tl += start ? t : 0.0;
+        }
+    }
+    for (; i < m; i++) {
+        uint64_t x = e[i];
+        double p = ev_pos(x);
+        if (p >= hi)
+            break;
+        size_t start = (size_t)(x >> 31) & 1;
+        double t = 0.0;
+        nr -= start ^ 1;
+        if (mode != COST_UNIFORM) {
+            t = ev_cost(b, x, mode);
+            tr -= start ? 0.0 : t;
+        }
+        lb.hi.v[k] = p;
+        rb.lo.v[k] = p;
+        double al = b->area(&lb, b->actx), ar = b->area(&rb, b->actx), c;
+        if (mailbox) {
+            double ab = al + ar - anode;
+            double ns = (double)(nl + nr - n);
+            ab = ab > 0.0 ? ab : 0.0;
+            if (mode == COST_UNIFORM) {
+                c = ctrav + (al * (double)nl + ar * (double)nr - ab * ns * unif_save) * unif_inv;
+            } else {
+                double save = (tl + tr - tsum) - mb_hit * ns;
+                c = ctrav + (al * tl + ar * tr - ab * (save > 0.0 ? save : 0.0)) * inv_area;
+            }
+        } else if (mode == COST_UNIFORM) {
+            c = ctrav + (al * (double)nl + ar * (double)nr) * unif_inv;
+        } else {
+            c = ctrav + (al * tl + ar * tr) * inv_area;
+        }
+        c = ((nl == 0) | (nr == 0)) ? c * bonus : c;
+        best_i = c < best_cost ? i : best_i;
+        best_cost = c < best_cost ? c : best_cost;
+        nl += start;
+        if (mode != COST_UNIFORM)
+            tl += start ? t : 0.0;
+    }
+    if (best_i != SIZE_MAX) {
+        best->cost = best_cost;
+        best->axis = k;
+        best->pos = key_float((uint32_t)(e[best_i] >> 32));
+        best->found = 1;
+    }
+}
+
+static int cmp_key(const void *x, const void *y)
+{
+    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+    return (a > b) - (a < b);
+}
+
+/* On random nodes (PER, PAR and mixed measures; uniform and per-primitive
+ * costs; with and without mailboxes; up to 1400 events per axis, so several
+ * runs; cells around the eye and next to it; positions shared by many
+ * events) the pruned sweep picks exactly the plane and cost of the full
+ * sweep. */
+TEST(pruned_view_sweep_picks_the_full_sweeps_plane)
+{
+    uint64_t rng = 0x2545f4914f6cdd1du;
+    enum { MAXN = 700 };
+    static uint64_t ev[3][2 * MAXN];
+    static double cost[MAXN];
+    int mismatches = 0, found = 0, nodes = 0;
+    char first[300] = "";
+    for (int it = 0; it < 1500; it++) {
+        int kind = it % 3;
+        kd_mixed_measure mm;
+        mm.view = random_view(&rng, kind == 1);
+        mm.w_view = rng_in(&rng, 0.05, 1.0) / (4.0 * mm.view.hx * mm.view.hy);
+        mm.w_surf = rng_in(&rng, 0.0, 1.0) / 100.0;
+        bsp_box cell = random_cell(&rng, &mm.view);
+        size_t n = 1 + (size_t)(rng_unit(&rng) * (rng_unit(&rng) < 0.3 ? MAXN : 40));
+        double grid = rng_unit(&rng) < 0.3 ? 0.05 : 0.0; /* shared positions */
+        sah_build b;
+        memset(&b, 0, sizeof b);
+        b.area = kind == 2 ? kd_mixed_area : kd_view_area;
+        b.actx = kind == 2 ? (const void *)&mm : (const void *)&mm.view;
+        b.ctrav = 1.0;
+        b.bonus_mul = rng_unit(&rng) < 0.5 ? 0.9 : 1.0;
+        b.mailbox = rng_unit(&rng) < 0.7;
+        b.mb_hit = 0.15;
+        b.cost_mode = rng_unit(&rng) < 0.5 ? COST_UNIFORM : COST_ARRAY;
+        b.unif = b.cost_mode == COST_UNIFORM ? 2.0 : 0.0;
+        b.cost = b.cost_mode == COST_ARRAY ? cost : NULL;
+        double tsum = 0.0;
+        for (size_t p = 0; p < n; p++) {
+            cost[p] = 0.25 * (double)(1 + (int)(rng_unit(&rng) * 16)); /* exact sums */
+            tsum += b.cost_mode == COST_UNIFORM ? b.unif : cost[p];
+            for (unsigned k = 0; k < 3; k++) {
+                double lo = cell.lo.v[k], w = cell.hi.v[k] - lo;
+                double a = rng_in(&rng, -0.1, 1.05), d = w * rng_in(&rng, 0.001, 0.3);
+                if (grid > 0.0)
+                    a = floor(a / grid) * grid;
+                float f0 = (float)(lo + a * w), f1 = (float)(lo + a * w + d);
+                if (!(f1 > f0))
+                    f1 = nextafterf(f0, INFINITY);
+                ev[k][2 * p] = make_event(f0 == 0.0f ? 0.0f : f0, 1, (uint32_t)p);
+                ev[k][2 * p + 1] = make_event(f1 == 0.0f ? 0.0f : f1, 0, (uint32_t)p);
+            }
+        }
+        double area = b.area(&cell, b.actx);
+        if (!(area > 0.0))
+            continue;
+        nodes++;
+        split_choice pruned = {INFINITY, 0, 0.0f, 0}, full = {INFINITY, 0, 0.0f, 0};
+        for (unsigned k = 0; k < 3; k++) {
+            qsort(ev[k], 2 * n, sizeof ev[k][0], cmp_key);
+            kd_sweep_measure(&b, ev[k], 2 * n, k, &cell, 1.0 / area, tsum, n, 0, &pruned);
+            full_sweep(&b, ev[k], 2 * n, k, &cell, 1.0 / area, tsum, n, &full);
+        }
+        found += full.found;
+        int same = pruned.found == full.found &&
+                   (!full.found || (pruned.axis == full.axis && pruned.pos == full.pos &&
+                                    memcmp(&pruned.cost, &full.cost, sizeof full.cost) == 0));
+        if (!same && mismatches++ == 0)
+            snprintf(first, sizeof first,
+                     "node %d (kind %d, n %zu): pruned axis %u pos %.9g cost %.17g, full axis "
+                     "%u pos %.9g cost %.17g",
+                     it, kind, n, pruned.axis, (double)pruned.pos, pruned.cost, full.axis,
+                     (double)full.pos, full.cost);
+        free(b.mruns);
+    }
+    CHECK_MSG(mismatches == 0, "%d of %d nodes differ; first: %s", mismatches, nodes, first);
+    CHECK(nodes > 1000 && found > nodes / 2);
+}

@@ -142,7 +142,7 @@ typedef struct sah_build {
     size_t list_cap;
     kd_clip_scratch clip;
     bsp_error *err;
-    void *mruns;        /* kd_sweep_measure's scratch, grown on demand */
+    void *mruns;        /* kd_sweep_measure's scratch (runs, positions), grown on demand */
     size_t mruns_cap;
 } sah_build;
 
@@ -222,9 +222,10 @@ HIDDEN void kd_sah_scratch_free(sah_build *b);
 
 /* The best plane on axis K of a node (its sorted events E[0..M), N
  * primitives, cost sum TSUM, cell CELL, 1 / its measure INV_AREA — halved
- * measures when SURFACE) by a full sweep of any measure, kept in *BEST when
- * cheaper (kd_sweep_measure.c). */
-HIDDEN void kd_sweep_measure(const sah_build *b, const uint64_t *e, size_t m, unsigned k,
+ * measures when SURFACE) by a sweep of any measure, kept in *BEST when
+ * cheaper (kd_sweep_measure.c: candidates that cannot win are left out by
+ * branch and bound, the same plane as a full sweep; grows b->mruns). */
+HIDDEN void kd_sweep_measure(sah_build *b, const uint64_t *e, size_t m, unsigned k,
                              const bsp_box *cell, double inv_area, double tsum, size_t n,
                              int surface, split_choice *best);
 

@@ -21,6 +21,7 @@
  * area instead (build_node in kd_split_sah.c), because the secondary and
  * shadow rays still need a good tree there (docs/modified-sah.md).
  */
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -142,12 +143,14 @@ static int convex_hull(pt2 *p, int n, pt2 *h)
 }
 
 /* Clips the convex polygon P[0..N) to the half-plane s * coord(axis) <= lim
- * into Q; returns Q's vertex count. */
-static int clip_half(const pt2 *p, int n, int axis, double s, double lim, pt2 *q)
+ * into Q; returns Q's vertex count. AXIS and S are constants after inlining
+ * (s * x is x or -x, exact). */
+static inline __attribute__((always_inline)) int clip_half(const pt2 *p, int n, const int axis,
+                                                           const double s, double lim, pt2 *q)
 {
     int m = 0;
     for (int i = 0; i < n; i++) {
-        pt2 a = p[i], b = p[(i + 1) % n];
+        pt2 a = p[i], b = i + 1 < n ? p[i + 1] : p[0];
         double da = s * (axis ? a.y : a.x) - lim, db = s * (axis ? b.y : b.x) - lim;
         if (da <= 0.0)
             q[m++] = a;
@@ -159,13 +162,24 @@ static int clip_half(const pt2 *p, int n, int axis, double s, double lim, pt2 *q
     return m;
 }
 
+/* Whether every vertex of P[0..N) is in the half-plane s * coord(axis) <=
+ * lim (with the comparison of clip_half): clipping would copy P unchanged. */
+static inline __attribute__((always_inline)) int in_half(const pt2 *p, int n, const int axis,
+                                                         const double s, double lim)
+{
+    int all = 1;
+    for (int i = 0; i < n; i++)
+        all &= s * (axis ? p[i].y : p[i].x) - lim <= 0.0;
+    return all;
+}
+
 static double polygon_area(const pt2 *p, int n)
 {
     double a = 0.0;
-    for (int i = 0; i < n; i++) {
-        const pt2 *u = &p[i], *w = &p[(i + 1) % n];
-        a += u->x * w->y - w->x * u->y;
-    }
+    for (int i = 0; i + 1 < n; i++)
+        a += p[i].x * p[i + 1].y - p[i + 1].x * p[i].y;
+    if (n > 0)
+        a += p[n - 1].x * p[0].y - p[0].x * p[n - 1].y;
     return 0.5 * fabs(a);
 }
 
@@ -174,99 +188,70 @@ static const unsigned char box_edges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {
                                                {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
 
 /* The area of polygon P[0..N) clipped to the viewport of V (P and the
- * scratch Q have room for N + 4 vertices; P is overwritten). */
+ * scratch Q have room for N + 4 vertices; P may be overwritten). A clip that
+ * would leave the polygon as it is is skipped: the same vertices, the same
+ * area. */
 static double clipped_area(const kd_view *v, pt2 *p, int n, pt2 *q)
 {
-    n = clip_half(p, n, 0, 1.0, v->hx, q);
-    n = clip_half(q, n, 0, -1.0, v->hx, p);
-    n = clip_half(p, n, 1, 1.0, v->hy, q);
-    n = clip_half(q, n, 1, -1.0, v->hy, p);
+    for (int h = 0; h < 4; h++) { /* x <= hx, x >= -hx, y <= hy, y >= -hy */
+        int axis = h >> 1;
+        double sign = (h & 1) ? -1.0 : 1.0, lim = axis ? v->hy : v->hx;
+        if (!in_half(p, n, axis, sign, lim)) {
+            n = clip_half(p, n, axis, sign, lim, q);
+            pt2 *t = p;
+            p = q;
+            q = t;
+        }
+    }
     return n >= 3 ? polygon_area(p, n) : 0.0;
 }
 
-/* Corner indices of the face of axis K on side S (0 lo, 1 hi), in cyclic order. */
-static void face_corners(int k, int side, int c[4])
+/* Corner indices of the face of axis K on side S (0 lo, 1 hi), in cyclic
+ * order: c[0] = S << K, then with the bit of axis K+1, of both, of K+2. */
+static const unsigned char face_corners[3][2][4] = {
+    {{0, 2, 6, 4}, {1, 3, 7, 5}}, /* x: then y, z */
+    {{0, 4, 5, 1}, {2, 6, 7, 3}}, /* y: then z, x */
+    {{0, 1, 3, 2}, {4, 5, 7, 6}}, /* z: then x, y */
+};
+
+/* B + E0 + E1 + E2 for the 8 corners (bit k of C: E_k added, else 0.0),
+ * summed left to right as written, sharing the partial sums. */
+static inline __attribute__((always_inline)) void corner_sums(double base, const double e[3],
+                                                              double out[8])
 {
-    int j1 = (k + 1) % 3, j2 = (k + 2) % 3, base = side << k;
-    c[0] = base;
-    c[1] = base | 1 << j1;
-    c[2] = base | 1 << j1 | 1 << j2;
-    c[3] = base | 1 << j2;
+    double s0 = base + 0.0, s1 = base + e[0];
+    double s00 = s0 + 0.0, s10 = s1 + 0.0, s01 = s0 + e[1], s11 = s1 + e[1];
+    out[0] = s00 + 0.0;
+    out[1] = s10 + 0.0;
+    out[2] = s01 + 0.0;
+    out[3] = s11 + 0.0;
+    out[4] = s00 + e[2];
+    out[5] = s10 + e[2];
+    out[6] = s01 + e[2];
+    out[7] = s11 + e[2];
 }
 
-double kd_view_area(const bsp_box *box, const void *ctx)
+/* The shoelace area of the quadrilateral of corners FC (projected to X, Y),
+ * as polygon_area would sum it. */
+static inline double quad_area(const double *x, const double *y, const unsigned char fc[4])
 {
-    const kd_view *v = ctx;
-    const double vp_area = 4.0 * v->hx * v->hy;
-    if (!v->ortho && v->eye.x >= box->lo.x && v->eye.x <= box->hi.x && v->eye.y >= box->lo.y &&
-        v->eye.y <= box->hi.y && v->eye.z >= box->lo.z && v->eye.z <= box->hi.z)
-        return vp_area; /* seen from inside: every ray crosses it */
+    double x0 = x[fc[0]], y0 = y[fc[0]], x1 = x[fc[1]], y1 = y[fc[1]];
+    double x2 = x[fc[2]], y2 = y[fc[2]], x3 = x[fc[3]], y3 = y[fc[3]];
+    double a = 0.0;
+    a += x0 * y1 - x1 * y0;
+    a += x1 * y2 - x2 * y1;
+    a += x2 * y3 - x3 * y2;
+    a += x3 * y0 - x0 * y3;
+    return 0.5 * fabs(a);
+}
 
-    /* corners in the view frame: (across, up, depth); corner c has bit k
-     * set when it is on the hi side of axis k */
-    double cx[8], cy[8], cz[8];
-    {
-        bsp_vec3 d0 = v3_sub(box->lo, v->eye);
-        double bx = v3_dot(d0, v->right), by = v3_dot(d0, v->up), bz = v3_dot(d0, v->fwd);
-        double ex[3], ey[3], ez[3];
-        for (int k = 0; k < 3; k++) {
-            double w = box->hi.v[k] - box->lo.v[k];
-            ex[k] = w * v->right.v[k];
-            ey[k] = w * v->up.v[k];
-            ez[k] = w * v->fwd.v[k];
-        }
-        for (int c = 0; c < 8; c++) {
-            cx[c] = bx + (c & 1 ? ex[0] : 0.0) + (c & 2 ? ex[1] : 0.0) + (c & 4 ? ex[2] : 0.0);
-            cy[c] = by + (c & 1 ? ey[0] : 0.0) + (c & 2 ? ey[1] : 0.0) + (c & 4 ? ey[2] : 0.0);
-            cz[c] = bz + (c & 1 ? ez[0] : 0.0) + (c & 2 ? ez[1] : 0.0) + (c & 4 ? ez[2] : 0.0);
-        }
-    }
-    /* near: PAR rays start on the window's plane; PER projects from the eye,
-     * so the polytope is cut a hair in front of it (relative to the box's
-     * size, so that the projected coordinates stay finite) */
-    double near = 0.0;
-    if (!v->ortho) {
-        double ext = fmax(box->hi.x - box->lo.x, fmax(box->hi.y - box->lo.y, box->hi.z - box->lo.z));
-        near = 1e-9 * ext;
-    }
+/* The part in front of the start plane of a box straddling it: the hull of
+ * its corners in front and of the points where its edges cross the plane
+ * (depth NEAR), projected, clipped to the viewport. */
+static double straddling_area(const kd_view *v, const double *cx, const double *cy,
+                              const double *cz, double near)
+{
     pt2 pts[8 + 12], hull[2 * (8 + 12)], tmp[2 * (8 + 12) + 8];
-    int front = 0;
-    for (int c = 0; c < 8; c++)
-        front += cz[c] >= near;
-    if (front == 0)
-        return 0.0; /* wholly behind */
-
-    if (front == 8) {
-        /* wholly in front: the projections of the faces turned towards the
-         * rays tile the silhouette, so the area is their sum (no hull) */
-        pt2 proj[8];
-        int inside = 1;
-        for (int c = 0; c < 8; c++) {
-            proj[c] = v->ortho ? (pt2){cx[c], cy[c]} : (pt2){cx[c] / cz[c], cy[c] / cz[c]};
-            inside &= fabs(proj[c].x) <= v->hx && fabs(proj[c].y) <= v->hy;
-        }
-        double a = 0.0;
-        for (int k = 0; k < 3; k++) {
-            for (int side = 0; side < 2; side++) {
-                /* PER: the face is seen when the eye is outside its plane;
-                 * PAR: when the rays run against its outward normal */
-                int seen = v->ortho ? (side ? v->fwd.v[k] < 0.0 : v->fwd.v[k] > 0.0)
-                                    : (side ? v->eye.v[k] > box->hi.v[k]
-                                            : v->eye.v[k] < box->lo.v[k]);
-                if (!seen)
-                    continue;
-                int fc[4];
-                face_corners(k, side, fc);
-                pt2 quad[4 + 4];
-                for (int i = 0; i < 4; i++)
-                    quad[i] = proj[fc[i]];
-                a += inside ? polygon_area(quad, 4) : clipped_area(v, quad, 4, tmp);
-            }
-        }
-        return a < vp_area ? a : vp_area;
-    }
-
-    /* straddling the start plane: the hull of the part in front */
     int n = 0;
     for (int c = 0; c < 8; c++) {
         if (!(cz[c] >= near))
@@ -286,26 +271,199 @@ double kd_view_area(const bsp_box *box, const void *ctx)
     int h = convex_hull(pts, n, hull);
     if (h < 3)
         return 0.0;
-    double a = clipped_area(v, hull, h, tmp);
+    return clipped_area(v, hull, h, tmp);
+}
+
+double kd_view_area(const bsp_box *box, const void *ctx)
+{
+    const kd_view *v = ctx;
+    const double vp_area = 4.0 * v->hx * v->hy;
+    const int ortho = v->ortho;
+    if (!ortho && v->eye.x >= box->lo.x && v->eye.x <= box->hi.x && v->eye.y >= box->lo.y &&
+        v->eye.y <= box->hi.y && v->eye.z >= box->lo.z && v->eye.z <= box->hi.z)
+        return vp_area; /* seen from inside: every ray crosses it */
+
+    /* corners in the view frame: (across, up, depth); corner c has bit k
+     * set when it is on the hi side of axis k */
+    double cx[8], cy[8], cz[8];
+    {
+        bsp_vec3 d0 = v3_sub(box->lo, v->eye);
+        double bx = v3_dot(d0, v->right), by = v3_dot(d0, v->up), bz = v3_dot(d0, v->fwd);
+        double ex[3], ey[3], ez[3];
+        for (int k = 0; k < 3; k++) {
+            double w = box->hi.v[k] - box->lo.v[k];
+            ex[k] = w * v->right.v[k];
+            ey[k] = w * v->up.v[k];
+            ez[k] = w * v->fwd.v[k];
+        }
+        corner_sums(bx, ex, cx);
+        corner_sums(by, ey, cy);
+        corner_sums(bz, ez, cz);
+    }
+    /* near: PAR rays start on the window's plane; PER projects from the eye,
+     * so the polytope is cut a hair in front of it (relative to the box's
+     * size, so that the projected coordinates stay finite) */
+    double near = 0.0;
+    if (!ortho) {
+        /* the largest extent (extents are >= +0, never NaN for a valid box) */
+        double wx = box->hi.x - box->lo.x, wy = box->hi.y - box->lo.y, wz = box->hi.z - box->lo.z;
+        double wyz = wy > wz ? wy : wz;
+        double ext = wx > wyz ? wx : wyz;
+        near = 1e-9 * ext;
+    }
+    int front = 0;
+    for (int c = 0; c < 8; c++)
+        front += cz[c] >= near;
+    if (front == 0)
+        return 0.0; /* wholly behind */
+    if (front < 8) {
+        /* straddling the start plane: the hull of the part in front */
+        double a = straddling_area(v, cx, cy, cz, near);
+        return a < vp_area ? a : vp_area;
+    }
+
+    /* wholly in front: the projections of the faces turned towards the
+     * rays tile the silhouette, so the area is their sum (no hull) */
+    double px[8], py[8];
+    if (ortho) {
+        for (int c = 0; c < 8; c++)
+            px[c] = cx[c], py[c] = cy[c];
+    } else {
+        for (int c = 0; c < 8; c++)
+            px[c] = cx[c] / cz[c], py[c] = cy[c] / cz[c];
+    }
+    int inside = 1;
+    for (int c = 0; c < 8; c++)
+        inside &= (fabs(px[c]) <= v->hx) & (fabs(py[c]) <= v->hy);
+    double a = 0.0;
+    for (int k = 0; k < 3; k++) {
+        /* PER: the face is seen when the eye is outside its plane (on one
+         * side of an axis at most); PAR: when the rays run against its
+         * outward normal */
+        int side;
+        if (ortho)
+            side = v->fwd.v[k] > 0.0 ? 0 : v->fwd.v[k] < 0.0 ? 1 : -1;
+        else
+            side = v->eye.v[k] < box->lo.v[k] ? 0 : v->eye.v[k] > box->hi.v[k] ? 1 : -1;
+        if (side < 0)
+            continue;
+        const unsigned char *fc = face_corners[k][side];
+        if (inside) {
+            a += quad_area(px, py, fc);
+        } else {
+            pt2 quad[4 + 4], tmp[4 + 4];
+            for (int i = 0; i < 4; i++)
+                quad[i] = (pt2){px[fc[i]], py[fc[i]]};
+            a += clipped_area(v, quad, 4, tmp);
+        }
+    }
     return a < vp_area ? a : vp_area;
 }
 
 /* --- the mixed measure ------------------------------------------------------------------------ */
 
-/* sah-mixed: the expected share of all the render's rays that cross a box,
- * w * A_view(B) / A_viewport + (1 - w) * SA(B) / SA(root), w the share of
- * primary rays: primary rays are counted by the projected area, every other
- * ray (shadow, reflected, refracted) as a uniformly distributed line. */
-typedef struct mixed_measure {
-    kd_view view;
-    double w_view; /* w / A_viewport */
-    double w_surf; /* (1 - w) / SA(root) */
-} mixed_measure;
-
-static double mixed_area(const bsp_box *box, const void *ctx)
+/* sah-mixed's measure (kd_view.h). */
+double kd_mixed_area(const bsp_box *box, const void *ctx)
 {
-    const mixed_measure *m = ctx;
+    const kd_mixed_measure *m = ctx;
     return m->w_view * kd_view_area(box, &m->view) + m->w_surf * kd_surface_area(box);
+}
+
+/* --- rounding of the measures ------------------------------------------------------------ */
+
+/*
+ * How far kd_view_area of a box inside CELL may be from the exact projected
+ * area, for the pruned sweep (kd_sweep_measure.c), which relies on the exact
+ * measures being monotone under inclusion and covering (al + ar >= A).
+ *
+ * The corners in the view frame are sums of terms up to R (the farthest
+ * corner from the eye), so they carry absolute errors of a few eps R. PAR
+ * projects them as they are: coordinates off by ~eps R, clipped to a window
+ * of half sizes hx, hy and summed over at most 3 faces of perimeter
+ * <= 4 (hx + hy) in the window, so the area is off by ~eps (hx + hy)
+ * (R + hx + hy) times a small constant. PER divides by the depth, at least
+ * D (the nearest corner of the cell, or the cut `near` of a box straddling
+ * the eye plane, >= 1e-9 of the cell's middle extent, which every box of a
+ * sweep exceeds): the projected coordinates then carry relative errors of
+ * ~eps R / D, and within the viewport (clipping keeps what is summed inside
+ * it) the area is off by ~eps (1 + R / D) (hx + hy)^2 times a constant.
+ * NOISE_K covers the constants many times over (the worst case seen on the
+ * SPD builds and on random boxes is below 1 % of this bound).
+ *
+ * Exact monotonicity itself fails next to the eye: a box cut at its own
+ * `near` (1e-9 of its size) keeps points at depths up to a larger box's
+ * `near`, which the larger box cuts off, and these points can project into
+ * the viewport only if they lie within ~1e-9 size * max(hx, hy) of the eye
+ * aside. So the children (the inner boxes of the sweep's comparisons; the
+ * covering holds exactly, as children cut nearer) are safe when they are
+ * farther than RHO = 1e-7 size (1 + 1.5 max(hx, hy)) from the eye (100 times
+ * that reach), or contain it (the whole viewport, the most). For the split
+ * axis that leaves: the children at positions within RHO of the eye, when
+ * the eye is inside the cell (ZONE: the sweep evaluates them all); no bound
+ * (INFINITY: every candidate evaluated) when the eye is within RHO of the
+ * cell but outside it on another axis, or just below or above it on the
+ * split axis.
+ */
+#define NOISE_K 256.0
+
+static double view_noise(const kd_view *v, const bsp_box *cell, unsigned axis, double zone[2])
+{
+    double e0 = cell->hi.x - cell->lo.x, e1 = cell->hi.y - cell->lo.y,
+           e2 = cell->hi.z - cell->lo.z;
+    double e01 = e0 > e1 ? e0 : e1, f01 = e0 < e1 ? e0 : e1;
+    double emax = e01 > e2 ? e01 : e2, emin = f01 < e2 ? f01 : e2;
+    double emid = e0 + e1 + e2 - emax - emin;
+    /* the farthest corner and the nearest depth, axis by axis */
+    double r2 = 0.0, dmin = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double dl = cell->lo.v[k] - v->eye.v[k], dh = cell->hi.v[k] - v->eye.v[k];
+        double ml = dl * dl, mh = dh * dh, fl = dl * v->fwd.v[k], fh = dh * v->fwd.v[k];
+        r2 += ml > mh ? ml : mh;
+        dmin += fl < fh ? fl : fh;
+    }
+    double R = sqrt(r2), s = v->hx + v->hy;
+    if (!(isfinite(R) && isfinite(s) && isfinite(emax)))
+        return INFINITY;
+    if (v->ortho)
+        return NOISE_K * DBL_EPSILON * s * (R + s);
+    /* the children next to the eye */
+    double rho = 1e-7 * emax * (1.0 + 1.5 * (v->hx > v->hy ? v->hx : v->hy));
+    double dj2 = 0.0; /* the eye's squared distance to the cell on the other axes */
+    for (unsigned k = 0; k < 3; k++) {
+        if (k == axis)
+            continue;
+        double x = v->eye.v[k], lo = cell->lo.v[k], hi = cell->hi.v[k];
+        double d = x < lo ? lo - x : x > hi ? x - hi : 0.0;
+        dj2 += d * d;
+    }
+    if (dj2 < rho * rho) {
+        double x = v->eye.v[axis], lo = cell->lo.v[axis], hi = cell->hi.v[axis];
+        if (dj2 > 0.0 || (x < lo && lo - x < rho) || (x > hi && x - hi < rho))
+            return INFINITY;
+        if (x >= lo && x <= hi) {
+            zone[0] = x - rho;
+            zone[1] = x + rho;
+        }
+    }
+    double D = dmin > 1e-9 * emid ? dmin : 1e-9 * emid;
+    if (!(D > 0.0))
+        return INFINITY;
+    return NOISE_K * DBL_EPSILON * s * s * (1.0 + R / D);
+}
+
+double kd_view_measure_noise(kd_area_fn measure, const void *ctx, const bsp_box *cell,
+                             unsigned axis, double zone[2])
+{
+    zone[0] = INFINITY;
+    zone[1] = -INFINITY;
+    if (measure == kd_view_area)
+        return view_noise(ctx, cell, axis, zone);
+    if (measure == kd_mixed_area) {
+        const kd_mixed_measure *m = ctx;
+        double dv = view_noise(&m->view, cell, axis, zone);
+        return m->w_view * dv + m->w_surf * NOISE_K * DBL_EPSILON * kd_surface_area(cell);
+    }
+    return INFINITY;
 }
 
 /* The camera of a view, for the renderer's pre-pass. */
@@ -349,10 +507,10 @@ bsp_status kd_build_view(kd_tree *t, const bsp_scene *scene, const bsp_build_opt
     if (!(share > 0.0 && share <= 1.0))
         return error_set(err, BSP_ERR_INVALID, NULL, 0,
                          "sah-mixed: the share of primary rays %g is outside (0, 1]", share);
-    mixed_measure m;
+    kd_mixed_measure m;
     m.view = v;
     m.w_view = share / (4.0 * v.hx * v.hy);
     double root_sa = kd_surface_area(&t->box);
     m.w_surf = root_sa > 0.0 ? (1.0 - share) / root_sa : 0.0;
-    return kd_build_sah_measure(t, scene, o, mixed_area, &m, err);
+    return kd_build_sah_measure(t, scene, o, kd_mixed_area, &m, err);
 }

@@ -18,6 +18,7 @@
 #ifndef BSPRAY_ACCEL_KD_VIEW_H
 #define BSPRAY_ACCEL_KD_VIEW_H
 
+#include "accel/kd_cost.h"
 #include "accel/kd_tree.h"
 
 /* A resolved view: an orthonormal frame and the viewport. */
@@ -41,6 +42,30 @@ HIDDEN bsp_status kd_view_resolve(const bsp_scene *scene, const bsp_build_option
  * behind the eye plane or outside the viewport; 4 hx hy for a box that
  * contains the eye (PER). CTX of kd_area_fn is a kd_view. */
 HIDDEN double kd_view_area(const bsp_box *box, const void *view);
+
+/* sah-mixed: the expected share of all the render's rays that cross a box,
+ * w * A_view(B) / A_viewport + (1 - w) * SA(B) / SA(root), w the share of
+ * primary rays: primary rays are counted by the projected area, every other
+ * ray (shadow, reflected, refracted) as a uniformly distributed line. */
+typedef struct kd_mixed_measure {
+    kd_view view;
+    double w_view; /* w / A_viewport */
+    double w_surf; /* (1 - w) / SA(root) */
+} kd_mixed_measure;
+
+/* The mixed measure of BOX; CTX is a kd_mixed_measure. */
+HIDDEN double kd_mixed_area(const bsp_box *box, const void *mixed);
+
+/* A bound on the rounding error of MEASURE (kd_view_area or kd_mixed_area;
+ * CTX its context) on the children of CELL
+ * split on AXIS, in its units: within that bound the measure is monotone
+ * under inclusion and the two children of a split cover their parent
+ * (al + ar >= A), which the pruned SAH sweep relies on — except for the
+ * children at positions in [ZONE[0], ZONE[1]] (next to the eye; an empty
+ * interval when there are none), which it must evaluate all. INFINITY where
+ * no such bound is known (a cell face at the eye; any other measure). */
+HIDDEN double kd_view_measure_noise(kd_area_fn measure, const void *ctx, const bsp_box *cell,
+                                    unsigned axis, double zone[2]);
 
 /* The sah-per, sah-par and sah-mixed builds of O->kind. */
 HIDDEN bsp_status kd_build_view(kd_tree *t, const bsp_scene *scene, const bsp_build_options *o,
