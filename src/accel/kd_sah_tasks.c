@@ -55,7 +55,7 @@ bsp_status kd_sah_defer(sah_build *b, uint32_t node, const bsp_box *cell, const 
     sah_task *tk = &ts->v[ts->n];
     memset(tk, 0, sizeof *tk);
     const size_t m = 2 * L->n;
-    tk->cap = 12 * L->n + 1024; /* as the root: its lists, then room to grow */
+    tk->cap = 3 * m; /* just its lists: the worker grows them (deferred tasks wait in memory) */
     tk->ev = malloc(tk->cap * sizeof *tk->ev);
     if (!tk->ev)
         return error_set(b->err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
