@@ -279,6 +279,31 @@ static double bf_cost(const bf_prim *ps, size_t n, bsp_box cell, int axis, doubl
     return c;
 }
 
+/* Fills PS[0..N) with the float-rounded padded boxes and costs of the
+ * scene's primitives and returns the least cost of a plane at any of their
+ * bounds strictly inside the root box, by brute force. */
+static double bf_best_root_cost(const bsp_scene *s, const kd_tree *t, const kd_cost_model *m,
+                                bf_prim *ps, int n)
+{
+    for (int i = 0; i < n; i++) {
+        bsp_box b = kd_prim_box(t, s, (uint32_t)i);
+        for (int k = 0; k < 3; k++) {
+            ps[i].box.lo.v[k] = float_down(b.lo.v[k]);
+            ps[i].box.hi.v[k] = float_up(b.hi.v[k]);
+        }
+        ps[i].cost = kd_prim_cost(s, (uint32_t)i, &m->c);
+    }
+    double best = INFINITY;
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            for (int side = 0; side < 2; side++) {
+                double sp = side ? ps[i].box.hi.v[k] : ps[i].box.lo.v[k];
+                if (sp > t->box.lo.v[k] && sp < t->box.hi.v[k])
+                    best = fmin(best, bf_cost(ps, (size_t)n, t->box, k, sp, m));
+            }
+    return best;
+}
+
 TEST(sah_root_plane_is_the_brute_force_optimum)
 {
     int checked = 0;
@@ -307,22 +332,7 @@ TEST(sah_root_plane_is_the_brute_force_optimum)
         kd_cost_model m;
         kd_cost_resolve(&o, &m);
         bf_prim ps[64];
-        for (int i = 0; i < n; i++) {
-            bsp_box b = kd_prim_box(t, s, (uint32_t)i);
-            for (int k = 0; k < 3; k++) {
-                ps[i].box.lo.v[k] = float_down(b.lo.v[k]);
-                ps[i].box.hi.v[k] = float_up(b.hi.v[k]);
-            }
-            ps[i].cost = kd_prim_cost(s, (uint32_t)i, &m.c);
-        }
-        double best = INFINITY;
-        for (int i = 0; i < n; i++)
-            for (int k = 0; k < 3; k++)
-                for (int side = 0; side < 2; side++) {
-                    double sp = side ? ps[i].box.hi.v[k] : ps[i].box.lo.v[k];
-                    if (sp > t->box.lo.v[k] && sp < t->box.hi.v[k])
-                        best = fmin(best, bf_cost(ps, (size_t)n, t->box, k, sp, &m));
-                }
+        double best = bf_best_root_cost(s, t, &m, ps, n);
         double leaf = 0;
         for (int i = 0; i < n; i++)
             leaf += ps[i].cost;
@@ -372,22 +382,7 @@ TEST(sah_root_plane_is_the_brute_force_optimum_on_large_nodes)
         kd_cost_resolve(&o, &m);
         bf_prim *ps = malloc((size_t)n * sizeof *ps);
         REQUIRE(ps);
-        for (int i = 0; i < n; i++) {
-            bsp_box b = kd_prim_box(t, s, (uint32_t)i);
-            for (int k = 0; k < 3; k++) {
-                ps[i].box.lo.v[k] = float_down(b.lo.v[k]);
-                ps[i].box.hi.v[k] = float_up(b.hi.v[k]);
-            }
-            ps[i].cost = kd_prim_cost(s, (uint32_t)i, &m.c);
-        }
-        double best = INFINITY;
-        for (int i = 0; i < n; i++)
-            for (int k = 0; k < 3; k++)
-                for (int side = 0; side < 2; side++) {
-                    double sp = side ? ps[i].box.hi.v[k] : ps[i].box.lo.v[k];
-                    if (sp > t->box.lo.v[k] && sp < t->box.hi.v[k])
-                        best = fmin(best, bf_cost(ps, (size_t)n, t->box, k, sp, &m));
-                }
+        double best = bf_best_root_cost(s, t, &m, ps, n);
         const kd_node *root = &t->nodes[0];
         REQUIRE(!kd_is_leaf(root));
         double got =
