@@ -177,6 +177,21 @@ descend(const kd_node *nodes, const kd_node *n, const trav_ray *r, const double 
     return n;
 }
 
+/* Moves to the cell after the current one: its entry point EN is the
+ * current exit point, which is popped; returns that cell's node, or NULL
+ * when the ray leaves the root box (*EX is then left as it is). */
+static inline const kd_node *pop_exit(double en[3], exit_point **ex)
+{
+    exit_point *x = *ex;
+    if (!x->node)
+        return NULL;
+    en[0] = x->pb[0];
+    en[1] = x->pb[1];
+    en[2] = x->pb[2];
+    *ex = x - 1;
+    return x->node;
+}
+
 /* Adds one query's counts to Q. REFS: leaf entries met (tested or skipped by
  * the mailbox). */
 static inline void count(bsp_query *q, uint64_t interior, uint64_t leaves, uint64_t nonempty,
@@ -239,13 +254,9 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
         }
         if (best.t <= ex->t)
             break; /* the closest hit lies inside this cell (best.t is inf without one) */
-        n = ex->node;
+        n = pop_exit(en, &ex);
         if (!n)
             break;
-        en[0] = ex->pb[0];
-        en[1] = ex->pb[1];
-        en[2] = ex->pb[2];
-        ex--;
     }
     count(q, interior, leaves, nonempty, refs, tests);
     if (best_p == BSP_NO_PRIM)
@@ -299,13 +310,9 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
             if (found)
                 break;
         }
-        n = ex->node;
+        n = pop_exit(en, &ex);
         if (!n)
             break;
-        en[0] = ex->pb[0];
-        en[1] = ex->pb[1];
-        en[2] = ex->pb[2];
-        ex--;
     }
     count(q, interior, leaves, nonempty, refs, tests);
     return found;
