@@ -37,6 +37,22 @@ static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray)
     r->tmin = ray->tmin;
 }
 
+/* The roots t0 <= t1 of a t^2 + 2 b t + c = 0 given disc = b^2 - a c >= 0
+ * (a != 0), by the stable formula: q = -(b + sign(b) sqrt(disc)), the roots
+ * q / a and c / q. */
+static inline void quadratic_roots(double a, double b, double c, double disc, double *t0,
+                                   double *t1)
+{
+    double q = -(b + copysign(sqrt(disc), b));
+    double r0 = 0.0, r1 = 0.0; /* q == 0: b == 0 and c == 0, a double root at 0 */
+    if (q != 0.0) {
+        r0 = q / a;
+        r1 = c / q;
+    }
+    *t0 = r0 > r1 ? r1 : r0;
+    *t1 = r0 > r1 ? r0 : r1;
+}
+
 /* --- sphere (see sphere.c for the numerics) ------------------------------ */
 
 ISECT_INLINE int sphere_isect(const sphere_shape *s, const isect_ray *ray, double tmax, double *t)
@@ -53,17 +69,8 @@ ISECT_INLINE int sphere_isect(const sphere_shape *s, const isect_ray *ray, doubl
         return 0;
     double c = v3_dot(oc, oc) - s->radius2;
 
-    double q = -(b + copysign(sqrt(disc), b));
-    double t0 = 0.0, t1 = 0.0; /* q == 0: b == 0 and c == 0, a double root at 0 */
-    if (q != 0.0) {
-        t0 = q / a;
-        t1 = c / q;
-    }
-    if (t0 > t1) {
-        double tmp = t0;
-        t0 = t1;
-        t1 = tmp;
-    }
+    double t0, t1;
+    quadratic_roots(a, b, c, disc, &t0, &t1);
     if (t0 >= ray->tmin && t0 <= tmax) {
         *t = t0;
         return 1;
@@ -189,17 +196,7 @@ ISECT_INLINE int cone_isect(const cone_shape *c, const isect_ray *ray, double tm
         double disc = qb * qb - qa * qc;
         if (!(disc >= 0.0))
             return 0;
-        double q = -(qb + copysign(sqrt(disc), qb));
-        t0 = t1 = 0.0; /* q == 0: qb == 0 and qc == 0, a double root at 0 */
-        if (q != 0.0) {
-            t0 = q / qa;
-            t1 = qc / q;
-        }
-        if (t0 > t1) {
-            double tmp = t0;
-            t0 = t1;
-            t1 = tmp;
-        }
+        quadratic_roots(qa, qb, qc, disc, &t0, &t1);
     }
     if (cone_valid_root(c, ray, tmax, h0, hd, t0)) {
         *t = t0;

@@ -661,17 +661,5 @@ bsp_status bsp_scene_load_nff_memory(const char *buf, size_t len, const char *na
 
 bsp_status nff_load_file(const char *path, bsp_scene **out, bsp_error *err)
 {
-    if (!out)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no output pointer");
-    *out = NULL;
-    if (!path)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no path");
-    char *buf = NULL;
-    size_t len = 0;
-    bsp_status st = mesh_read_file(path, &buf, &len, err); /* same 2 GiB limit */
-    if (st != BSP_OK)
-        return st;
-    st = load_buffer(buf, len, path, out, err);
-    free(buf);
-    return st;
+    return mesh_load_file(load_buffer, path, out, err); /* the meshes' 2 GiB read limit */
 }
