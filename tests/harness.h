@@ -28,6 +28,9 @@ const char *harness_shared_dir(void);
 const char *harness_cli(void);
 /* A fresh temporary directory for this run (created on first use). */
 const char *harness_tmpdir(void);
+/* Everything F has left, NUL-terminated (malloc'd), or NULL when out of
+ * memory. */
+char *harness_read_all(FILE *f);
 /* Runs CMD through the shell; returns its standard output (malloc'd, NUL
  * terminated; NULL when it cannot run) and sets *STATUS to its exit status
  * (-1 when it did not exit normally). */

@@ -84,25 +84,33 @@ const char *harness_cli(void)
     return env && *env ? env : "build/bspray";
 }
 
-char *harness_run(const char *cmd, int *status)
+char *harness_read_all(FILE *f)
 {
-    FILE *p = popen(cmd, "r");
-    if (!p)
-        return NULL;
     size_t cap = 1 << 16, len = 0, n;
     char *buf = malloc(cap);
-    while (buf && (n = fread(buf + len, 1, cap - len - 1, p)) > 0) {
+    while (buf && (n = fread(buf + len, 1, cap - len - 1, f)) > 0) {
         len += n;
         if (cap - len < 4096) {
             char *nb = realloc(buf, cap * 2);
-            if (!nb)
-                break;
+            if (!nb) {
+                free(buf);
+                return NULL;
+            }
             buf = nb;
             cap *= 2;
         }
     }
     if (buf)
         buf[len] = 0;
+    return buf;
+}
+
+char *harness_run(const char *cmd, int *status)
+{
+    FILE *p = popen(cmd, "r");
+    if (!p)
+        return NULL;
+    char *buf = harness_read_all(p);
     int st = pclose(p);
     *status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
     return buf;

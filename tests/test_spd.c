@@ -110,24 +110,8 @@ static char *read_text(const char *path)
     FILE *fp = fopen(path, "rb");
     if (!fp)
         return NULL;
-    size_t cap = 1 << 16, n = 0, got;
-    char *buf = malloc(cap);
-    while (buf && (got = fread(buf + n, 1, cap - n - 1, fp)) > 0) {
-        n += got;
-        if (cap - n < 2) {
-            char *nb = realloc(buf, cap * 2);
-            if (!nb) {
-                free(buf);
-                buf = NULL;
-                break;
-            }
-            buf = nb;
-            cap *= 2;
-        }
-    }
+    char *buf = harness_read_all(fp);
     fclose(fp);
-    if (buf)
-        buf[n] = '\0';
     return buf;
 }
 

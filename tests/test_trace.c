@@ -271,35 +271,6 @@ TEST(naive_ties_go_to_lowest_index)
     bsp_scene_destroy(s);
 }
 
-/* Runs CMD through the shell and returns its standard output (malloc'd). */
-static char *run_capture(const char *cmd, int *status)
-{
-    FILE *p = popen(cmd, "r");
-    if (!p)
-        return NULL;
-    size_t cap = 1 << 16, len = 0;
-    char *buf = malloc(cap);
-    size_t n;
-    while (buf && (n = fread(buf + len, 1, cap - len - 1, p)) > 0) {
-        len += n;
-        if (cap - len < 1024) {
-            char *nb = realloc(buf, cap * 2);
-            if (!nb) {
-                free(buf);
-                buf = NULL;
-                break;
-            }
-            buf = nb;
-            cap *= 2;
-        }
-    }
-    if (buf)
-        buf[len] = 0;
-    int st = pclose(p);
-    *status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    return buf;
-}
-
 TEST(cli_trace_matches_independent_reference)
 {
     ref_scene rs;
@@ -331,7 +302,7 @@ TEST(cli_trace_matches_independent_reference)
         snprintf(cmd, sizeof cmd, "%s trace %s --rays %s%s", harness_cli(), rs.nff_path,
                  rays_path, any ? " --any" : "");
         int status;
-        char *out = run_capture(cmd, &status);
+        char *out = harness_run(cmd, &status);
         REQUIRE(out);
         CHECK_EQ_INT(status, 0);
         char *line = out, *next;
@@ -392,7 +363,7 @@ TEST(cli_trace_rejects_bad_rays)
         snprintf(cmd, sizeof cmd, "%s trace %s --rays %s 2>&1 >/dev/null", harness_cli(),
                  rs.nff_path, path);
         int status;
-        char *out = run_capture(cmd, &status);
+        char *out = harness_run(cmd, &status);
         REQUIRE(out);
         CHECK_EQ_INT(status, 1);
         char where[700];
@@ -428,7 +399,7 @@ TEST(cli_usage_errors)
         char cmd[1024];
         snprintf(cmd, sizeof cmd, "%s %s 2>&1", harness_cli(), cases[c].args);
         int status;
-        char *out = run_capture(cmd, &status);
+        char *out = harness_run(cmd, &status);
         REQUIRE(out);
         CHECK_MSG(status == cases[c].status, "'%s': exit %d, expected %d", cases[c].args, status,
                   cases[c].status);
@@ -443,7 +414,7 @@ TEST(cli_usage_errors)
         char cmd[1024];
         snprintf(cmd, sizeof cmd, "%s %s 2>&1", harness_cli(), helps[c]);
         int status;
-        char *out = run_capture(cmd, &status);
+        char *out = harness_run(cmd, &status);
         REQUIRE(out);
         CHECK_EQ_INT(status, 0);
         CHECK_STR_CONTAINS(out, "usage");
