@@ -210,7 +210,8 @@ HIDDEN bsp_status kd_sah_defer(sah_build *b, uint32_t node, const bsp_box *cell,
                                const node_lists *L, int depth, int surface);
 
 /* Builds the deferred subtrees on THREADS threads (each with scratch of its
- * own) and splices them into b->t in task order; frees the tasks. THREADS
+ * own; B's scratch is freed first) and splices them into b->t in task order;
+ * frees the tasks. THREADS
  * <= 0: only frees them. */
 HIDDEN bsp_status kd_sah_run_tasks(sah_build *b, int threads);
 

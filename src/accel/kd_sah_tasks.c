@@ -120,20 +120,9 @@ typedef struct task_pool {
 static void *worker(void *arg)
 {
     task_pool *pool = arg;
+    /* the main build's state with no scratch (kd_sah_run_tasks freed it):
+     * each worker grows its own; the per-primitive inputs stay shared */
     sah_build w = *pool->main;
-    /* scratch of its own; the per-primitive inputs stay shared */
-    w.tasks = NULL;
-    w.ev = NULL;
-    w.cap = 0;
-    w.nev[0] = w.nev[1] = NULL;
-    w.nev_cap = 0;
-    w.list = NULL;
-    w.list_cap = 0;
-    w.chunks = NULL;
-    w.chunks_cap = 0;
-    w.mruns = NULL;
-    w.mruns_cap = 0;
-    memset(&w.clip, 0, sizeof w.clip);
     w.cls = calloc((size_t)w.spare + 1, 1);
     while (w.cls) { /* without it, the other workers take the tasks */
         pthread_mutex_lock(&pool->lock);
@@ -190,6 +179,7 @@ bsp_status kd_sah_run_tasks(sah_build *b, int threads)
     sah_tasks *ts = b->tasks;
     bsp_status st = BSP_OK;
     b->tasks = NULL;
+    kd_sah_scratch_free(b); /* the workers copy B: with no scratch to share */
     if (threads > 0 && ts->n > 0) {
         task_pool pool = {b, ts, 0, PTHREAD_MUTEX_INITIALIZER};
         if ((size_t)threads > ts->n)

@@ -644,8 +644,6 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     tasks.min_n = tasks.max_n / 8;
     b.tasks = &tasks;
     st = kd_sah_build_node(&b, 0, t->box, root, 3 * m, 0, 0, b.surface, &cost);
-    /* the tasks get scratch of their own: the main build's is not needed now */
-    kd_sah_scratch_free(&b);
     bsp_status rt = kd_sah_run_tasks(&b, st == BSP_OK ? kd_build_threads(o) : 0);
     if (st == BSP_OK)
         st = rt;
