@@ -373,6 +373,7 @@ TEST(view_measures_monotone_and_covering_within_their_noise)
     for (int vi = 0; vi < 600; vi++) {
         int kind = vi % 3; /* PER, PAR, mixed */
         kd_mixed_measure mm;
+        memset(&mm, 0, sizeof mm); /* the surface model: no sampled term */
         mm.view = random_view(&rng, kind == 1);
         mm.w_view = rng_in(&rng, 0.05, 1.0) / (4.0 * mm.view.hx * mm.view.hy);
         mm.w_surf = rng_in(&rng, 0.0, 1.0) / 100.0;
@@ -513,6 +514,7 @@ TEST(pruned_view_sweep_picks_the_full_sweeps_plane)
     for (int it = 0; it < 1500; it++) {
         int kind = it % 3;
         kd_mixed_measure mm;
+        memset(&mm, 0, sizeof mm); /* the surface model: no sampled term */
         mm.view = random_view(&rng, kind == 1);
         mm.w_view = rng_in(&rng, 0.05, 1.0) / (4.0 * mm.view.hx * mm.view.hy);
         mm.w_surf = rng_in(&rng, 0.0, 1.0) / 100.0;

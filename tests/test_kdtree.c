@@ -139,6 +139,7 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
             bsp_build_options_defaults(&o);
             o.kind = (bsp_accel_kind)k;
             o.mailbox = mb;
+            o.mixed_model = mb ? BSP_MIXED_SURFACE : BSP_MIXED_SAMPLED; /* both of sah-mixed's */
             if (!bsp_scene_camera(scene)) {
                 /* the view rules need a view: one from inside the scene's
                  * box (its cells containing the eye see every ray), looking
@@ -506,6 +507,7 @@ static void check_render(const char *spec, int res)
             bsp_build_options_defaults(&o);
             o.kind = (bsp_accel_kind)k;
             o.mailbox = mb;
+            o.mixed_model = mb ? BSP_MIXED_SURFACE : BSP_MIXED_SAMPLED;
             REQUIRE(bsp_accel_build(s, &o, &c.kd[c.nkd], &err) == BSP_OK);
             CHECK_MSG(bsp_accel_check(c.kd[c.nkd], &err) == BSP_OK, "%s: %s", spec, err.message);
             c.nkd++;

@@ -54,6 +54,17 @@ int parse_on_off(args *a, const char *opt)
     return 0;
 }
 
+bsp_mixed_model parse_mixed_model(args *a, const char *opt)
+{
+    const char *v = opt_value(a, opt);
+    if (!strcmp(v, "surface"))
+        return BSP_MIXED_SURFACE;
+    if (!strcmp(v, "sampled"))
+        return BSP_MIXED_SAMPLED;
+    die_usage(a->usage, "expected surface or sampled, got '%s'", v);
+    return BSP_MIXED_SURFACE;
+}
+
 int is_help(const char *s)
 {
     return !strcmp(s, "-h") || !strcmp(s, "--help");
@@ -179,6 +190,9 @@ const char build_args_help[] =
     "                     where the cost model would make a leaf (the paper's criteria)\n"
     "  --mixed-share F    sah-mixed: share of primary rays among all rays, in (0, 1]\n"
     "                     (default: measured by a 65 x 65 pre-pass)\n"
+    "  --mixed-model M    sah-mixed: how the non-primary rays are modelled: surface\n"
+    "                     (default: uniform lines, the surface area) or sampled (their\n"
+    "                     density in the pre-pass; see docs/modified-sah.md)\n"
     "  --build-threads N  sah family: build threads (default: every core); the tree is\n"
     "                     the same for any N\n";
 
@@ -197,6 +211,8 @@ int parse_build_arg(args *a, bsp_build_options *opts)
         opts->sah_split_to_limits = 1;
     } else if (!strcmp(s, "--build-threads")) {
         opts->threads = parse_int(a, s, 1, 256);
+    } else if (!strcmp(s, "--mixed-model")) {
+        opts->mixed_model = parse_mixed_model(a, s);
     } else if (!strcmp(s, "--mixed-share")) {
         opts->mixed_primary_share =
             parse_real(a, s, opt_value(a, s), in_share_range, "a number in (0, 1]");

@@ -25,7 +25,8 @@
 
 static const char paper_usage[] =
     "bspray bench --paper [SCENE...] [--accel LIST] [--res N] [--depth N] [--threads N]\n"
-    "                     [--validate N] [--repeat N] [--cost-termination] [--csv FILE]\n"
+    "                     [--validate N] [--repeat N] [--mailbox on|off] [--mixed-model M]\n"
+    "                     [--cost-termination] [--csv FILE]\n"
     "                     [--quiet]";
 
 typedef struct paper_rule {
@@ -73,6 +74,8 @@ typedef struct cell {
 typedef struct paper_opts {
     int res, depth, threads, nvalidate, quiet, repeat;
     int cost_termination; /* 0: split to the limits, as the paper */
+    int mailbox;          /* traversal with mailboxes, trees built for them (default 1) */
+    bsp_mixed_model mixed_model; /* sah-mixed's model of the other rays */
     paper_rule rules[MAX_RULES];
     int nrules;
 } paper_opts;
@@ -97,6 +100,10 @@ static void print_help(void)
            "  --threads N     build and render threads (default 1: single-thread times)\n"
            "  --validate N    random rays compared with naive before each render (default 5000)\n"
            "  --repeat N      render N times and report the best time (default 1)\n"
+           "  --mailbox on|off  mailboxes in the traversal and in the trees' cost model\n"
+           "                  (default on; Havran's reference tables count without them)\n"
+           "  --mixed-model M sah-mixed's model of the non-primary rays: surface (default)\n"
+           "                  or sampled (see 'bspray render --help')\n"
            "  --cost-termination  SAH trees also make a leaf where no split pays (bspray's\n"
            "                  everyday rule); by default they split until the limits, as the\n"
            "                  paper's trees do\n"
@@ -130,6 +137,8 @@ static int run_cell(const paper_opts *o, const char *name, const bsp_scene *scen
     bo.max_leaf_prims = 2;
     bo.sah_split_to_limits = !o->cost_termination;
     bo.threads = o->threads; /* T_B on as many threads as the render (default 1) */
+    bo.mailbox = o->mailbox;
+    bo.mixed_model = o->mixed_model;
     if (!o->quiet)
         fprintf(stderr, "%s: %s: %s: building\n", prog, name, r->label);
     bsp_accel *accel = build_accel(scene, &bo);
@@ -426,6 +435,8 @@ int bench_paper(int argc, char **argv)
     o.threads = 1;
     o.nvalidate = 5000;
     o.repeat = 1;
+    o.mailbox = 1;
+    o.mixed_model = BSP_MIXED_SURFACE;
     o.nrules = (int)(sizeof default_rules / sizeof default_rules[0]);
     memcpy(o.rules, default_rules, sizeof default_rules);
     const char *csv_path = NULL;
@@ -456,6 +467,10 @@ int bench_paper(int argc, char **argv)
             o.threads = parse_int(&a, s, 1, 256);
         } else if (!strcmp(s, "--validate")) {
             o.nvalidate = parse_int(&a, s, 0, 100000000);
+        } else if (!strcmp(s, "--mailbox")) {
+            o.mailbox = parse_on_off(&a, s);
+        } else if (!strcmp(s, "--mixed-model")) {
+            o.mixed_model = parse_mixed_model(&a, s);
         } else if (!strcmp(s, "--cost-termination")) {
             o.cost_termination = 1;
         } else if (!strcmp(s, "--repeat")) {
@@ -488,8 +503,10 @@ int bench_paper(int argc, char **argv)
         return EXIT_INPUT;
     }
     printf("## Table 1: BSP trees for restricted ray sets (%d x %d rays, ray depth %d, tree "
-           "depth 18, 2 primitives per leaf%s, mailboxes)\n",
-           o.res, o.res, o.depth, o.cost_termination ? ", leaves also by cost" : "");
+           "depth 18, 2 primitives per leaf%s, %s%s)\n",
+           o.res, o.res, o.depth, o.cost_termination ? ", leaves also by cost" : "",
+           o.mailbox ? "mailboxes" : "no mailboxes",
+           o.mixed_model == BSP_MIXED_SAMPLED ? ", sah-mixed sampled" : "");
     int rc = 0;
     for (int s = 0; s < nscenes && rc == 0; s++) {
         bsp_scene *scene = load_scene(scenes[s]);

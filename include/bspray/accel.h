@@ -74,6 +74,16 @@ typedef struct bsp_view {
                            (for an explicit view |dir| stands for |at - eye|) */
 } bsp_view;
 
+/* sah-mixed: how the rays other than the primary ones are modelled. */
+typedef enum bsp_mixed_model {
+    /* as uniformly distributed lines through the scene's box: the surface
+       area (the SAH's own assumption) */
+    BSP_MIXED_SURFACE = 0,
+    /* by where they actually run: their density, sampled from the pre-pass's
+       shadow and secondary rays on a voxel grid (docs/modified-sah.md) */
+    BSP_MIXED_SAMPLED = 1
+} bsp_mixed_model;
+
 /* Build options; always start from bsp_build_options_defaults(). */
 typedef struct bsp_build_options {
     bsp_accel_kind kind;
@@ -96,6 +106,8 @@ typedef struct bsp_build_options {
                                    renderer (depth 4) from the view */
     int threads;             /* sah family: build threads; 0: every online core. The tree
                                 is the same for any count */
+    bsp_mixed_model mixed_model; /* sah-mixed: the model of the non-primary rays (default
+                                    BSP_MIXED_SURFACE) */
 } bsp_build_options;
 
 void bsp_build_options_defaults(bsp_build_options *opts);

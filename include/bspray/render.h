@@ -118,7 +118,7 @@ bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts, bs
 /* The share of primary rays among all the rays (primary, shadow, reflected,
  * refracted) of a Whitted render of SCENE through CAMERA (NULL: the scene's;
  * its resolution + 1 rays across, SPD protocol) with ray depth MAX_DEPTH
- * (0: 4), on a Kaplan tree: the pre-pass of sah-mixed. */
+ * (0: 4): the pre-pass of sah-mixed. */
 bsp_status bsp_measure_primary_share(const bsp_scene *scene, const bsp_camera *camera,
                                      int max_depth, double *share, bsp_error *err);
 

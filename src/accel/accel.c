@@ -26,6 +26,7 @@ void bsp_build_options_defaults(bsp_build_options *opts)
     opts->mailbox = 1;
     kd_cost_defaults(&opts->sah_costs);
     opts->sah_empty_bonus = KD_DEFAULT_EMPTY_BONUS;
+    opts->mixed_model = BSP_MIXED_SURFACE;
 }
 
 const char *bsp_accel_kind_name(bsp_accel_kind kind)

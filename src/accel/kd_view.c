@@ -23,9 +23,11 @@
  */
 #include <float.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "accel/kd_cost.h"
+#include "accel/kd_prepass.h"
 #include "accel/kd_view.h"
 #include "bspray/render.h"
 #include "geom/vec.h"
@@ -366,7 +368,8 @@ double kd_view_area(const bsp_box *box, const void *ctx)
 double kd_mixed_area(const bsp_box *box, const void *ctx)
 {
     const kd_mixed_measure *m = ctx;
-    return m->w_view * kd_view_area(box, &m->view) + m->w_surf * kd_surface_area(box);
+    double a = m->w_view * kd_view_area(box, &m->view) + m->w_surf * kd_surface_area(box);
+    return m->w_flux > 0.0 ? a + m->w_flux * kd_flux_measure(m->flux, box) : a;
 }
 
 /* --- rounding of the measures ------------------------------------------------------------ */
@@ -460,6 +463,8 @@ double kd_view_measure_noise(kd_area_fn measure, const void *ctx, const bsp_box 
         return view_noise(ctx, cell, axis, zone);
     if (measure == kd_mixed_area) {
         const kd_mixed_measure *m = ctx;
+        if (m->w_flux > 0.0)
+            return INFINITY; /* the sampled term is not monotone (kd_flux.h) */
         double dv = view_noise(&m->view, cell, axis, zone);
         return m->w_view * dv + m->w_surf * NOISE_K * DBL_EPSILON * kd_surface_area(cell);
     }
@@ -485,6 +490,10 @@ static bsp_camera view_camera(const bsp_scene *scene, const bsp_build_options *o
 
 /* Side of the sah-mixed pre-pass image, in rays. */
 #define MIXED_PREPASS_RES 65
+/* The sampled model: voxels of its density grid, and the weight b of the
+ * uniform lines under it (docs/modified-sah.md). */
+#define MIXED_FLUX_CELLS 16384
+#define MIXED_FLUX_FLOOR 0.1
 
 bsp_status kd_build_view(kd_tree *t, const bsp_scene *scene, const bsp_build_options *o,
                          bsp_error *err)
@@ -497,20 +506,47 @@ bsp_status kd_build_view(kd_tree *t, const bsp_scene *scene, const bsp_build_opt
     if (o->kind != BSP_ACCEL_SAH_MIXED)
         return kd_build_sah_measure(t, scene, o, kd_view_area, &v, err);
 
+    int sampled = o->mixed_model == BSP_MIXED_SAMPLED;
+    if (!sampled && o->mixed_model != BSP_MIXED_SURFACE)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "sah-mixed: unknown model %d",
+                         (int)o->mixed_model);
     double share = o->mixed_primary_share;
-    if (share == 0.0) {
-        bsp_camera cam = view_camera(scene, o, MIXED_PREPASS_RES);
-        st = bsp_measure_primary_share(scene, &cam, 0, &share, err);
-        if (st != BSP_OK)
-            return st;
-    }
-    if (!(share > 0.0 && share <= 1.0))
+    if (share != 0.0 && !(share > 0.0 && share <= 1.0))
         return error_set(err, BSP_ERR_INVALID, NULL, 0,
                          "sah-mixed: the share of primary rays %g is outside (0, 1]", share);
+    kd_flux_segment *seg = NULL;
+    size_t nseg = 0;
+    if (share == 0.0 || sampled) {
+        bsp_camera cam = view_camera(scene, o, MIXED_PREPASS_RES);
+        double measured;
+        st = kd_mixed_prepass(scene, &cam, 0, o->threads, &measured, sampled ? &seg : NULL, &nseg,
+                              err);
+        if (st != BSP_OK)
+            return st;
+        if (share == 0.0)
+            share = measured;
+    }
     kd_mixed_measure m;
+    memset(&m, 0, sizeof m);
     m.view = v;
     m.w_view = share / (4.0 * v.hx * v.hy);
     double root_sa = kd_surface_area(&t->box);
-    m.w_surf = root_sa > 0.0 ? (1.0 - share) / root_sa : 0.0;
-    return kd_build_sah_measure(t, scene, o, kd_mixed_area, &m, err);
+    double floor_share = 1.0;
+    kd_flux flux;
+    memset(&flux, 0, sizeof flux);
+    if (sampled) {
+        st = kd_flux_build(&flux, &t->box, seg, nseg, MIXED_FLUX_CELLS, err);
+        free(seg);
+        if (st != BSP_OK)
+            return st;
+        if (flux.total > 0.0 && isfinite(flux.total)) {
+            floor_share = MIXED_FLUX_FLOOR;
+            m.w_flux = (1.0 - share) * (1.0 - floor_share) / flux.total;
+            m.flux = &flux;
+        }
+    }
+    m.w_surf = root_sa > 0.0 ? (1.0 - share) * floor_share / root_sa : 0.0;
+    st = kd_build_sah_measure(t, scene, o, kd_mixed_area, &m, err);
+    kd_flux_free(&flux);
+    return st;
 }

@@ -19,6 +19,7 @@
 #define BSPRAY_ACCEL_KD_VIEW_H
 
 #include "accel/kd_cost.h"
+#include "accel/kd_flux.h"
 #include "accel/kd_tree.h"
 
 /* A resolved view: an orthonormal frame and the viewport. */
@@ -44,13 +45,19 @@ HIDDEN bsp_status kd_view_resolve(const bsp_scene *scene, const bsp_build_option
 HIDDEN double kd_view_area(const bsp_box *box, const void *view);
 
 /* sah-mixed: the expected share of all the render's rays that cross a box,
- * w * A_view(B) / A_viewport + (1 - w) * SA(B) / SA(root), w the share of
- * primary rays: primary rays are counted by the projected area, every other
- * ray (shadow, reflected, refracted) as a uniformly distributed line. */
+ * w * A_view(B) / A_viewport + (1 - w) * P_other(B), w the share of primary
+ * rays: primary rays are counted by the projected area, every other ray
+ * (shadow, reflected, refracted) by P_other. The surface model takes them
+ * for uniformly distributed lines, P_other = SA(B) / SA(root); the sampled
+ * model by the density of the pre-pass's rays (kd_flux.h), with a floor of
+ * uniform lines where the sample is thin: P_other = (1 - b) F(B) / F(root)
+ * + b SA(B) / SA(root). */
 typedef struct kd_mixed_measure {
     kd_view view;
-    double w_view; /* w / A_viewport */
-    double w_surf; /* (1 - w) / SA(root) */
+    double w_view;        /* w / A_viewport */
+    double w_surf;        /* (1 - w) / SA(root), or (1 - w) b / SA(root) */
+    double w_flux;        /* (1 - w) (1 - b) / F(root); 0: no sampled term */
+    const kd_flux *flux;  /* the sampled term's density, when w_flux > 0 */
 } kd_mixed_measure;
 
 /* The mixed measure of BOX; CTX is a kd_mixed_measure. */

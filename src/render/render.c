@@ -349,32 +349,3 @@ bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts_in,
     *out = job.img;
     return BSP_OK;
 }
-
-bsp_status bsp_measure_primary_share(const bsp_scene *scene, const bsp_camera *camera,
-                                     int max_depth, double *share, bsp_error *err)
-{
-    bsp_build_options bo;
-    bsp_build_options_defaults(&bo);
-    bo.kind = BSP_ACCEL_KAPLAN; /* ray counts do not depend on the structure */
-    bsp_accel *a = NULL;
-    bsp_status st = bsp_accel_build(scene, &bo, &a, err);
-    if (st != BSP_OK)
-        return st;
-    bsp_render_options ro;
-    bsp_render_options_defaults(&ro);
-    ro.camera = camera;
-    if (max_depth > 0)
-        ro.max_depth = max_depth;
-    bsp_image *img = NULL;
-    bsp_render_stats rs;
-    st = bsp_render(a, &ro, &img, &rs, err);
-    bsp_image_destroy(img);
-    bsp_accel_destroy(a);
-    if (st != BSP_OK)
-        return st;
-    uint64_t all = 0;
-    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++)
-        all += rs.cls[c].rays;
-    *share = all ? (double)rs.cls[BSP_RAY_PRIMARY].rays / (double)all : 1.0;
-    return BSP_OK;
-}

@@ -1,0 +1,212 @@
+/*
+ * kd_flux.c — the sampled-ray measure of kd_flux.h: a voxel grid of
+ * crossing densities filled by walking the sample's segments through it
+ * (Amanatides & Woo), and face integrals from per-slab 2D prefix sums.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "accel/kd_flux.h"
+
+#define FLUX_MAX_PER_AXIS 128
+
+/* Voxels per axis for about CELLS cubic voxels over extents E (an axis of
+ * no extent gets one voxel). */
+static void grid_shape(const double e[3], size_t cells, int n[3])
+{
+    double vol = 1.0;
+    int dims = 0;
+    for (int k = 0; k < 3; k++)
+        if (e[k] > 0.0) {
+            vol *= e[k];
+            dims++;
+        }
+    double side = dims ? pow(vol / (double)cells, 1.0 / dims) : 1.0;
+    for (int k = 0; k < 3; k++) {
+        double c = e[k] > 0.0 && side > 0.0 ? floor(e[k] / side + 0.5) : 1.0;
+        n[k] = c < 1.0 ? 1 : c > FLUX_MAX_PER_AXIS ? FLUX_MAX_PER_AXIS : (int)c;
+    }
+}
+
+static int clampi(double x, int n)
+{
+    return x < 0.0 ? 0 : x >= (double)n ? n - 1 : (int)x;
+}
+
+/* Adds segment S's runs through the voxels to ACC (3 sums per voxel:
+ * run length in t times |d_k|, for k = 0, 1, 2). */
+static void walk_segment(const kd_flux *f, const kd_flux_segment *s, double *acc)
+{
+    double t0 = s->t0, t1 = s->t1;
+    const double o[3] = {s->org.x, s->org.y, s->org.z}, d[3] = {s->dir.x, s->dir.y, s->dir.z};
+    for (int k = 0; k < 3; k++) {
+        if (!isfinite(o[k]) || !isfinite(d[k]))
+            return;
+        double lo = f->box.lo.v[k], hi = f->box.hi.v[k];
+        if (d[k] == 0.0) {
+            if (o[k] < lo || o[k] > hi)
+                return;
+            continue;
+        }
+        double ta = (lo - o[k]) / d[k], tb = (hi - o[k]) / d[k];
+        if (ta > tb) {
+            double x = ta;
+            ta = tb;
+            tb = x;
+        }
+        t0 = ta > t0 ? ta : t0;
+        t1 = tb < t1 ? tb : t1;
+    }
+    if (!(t0 < t1) || !isfinite(t1))
+        return;
+    const double ad[3] = {fabs(d[0]), fabs(d[1]), fabs(d[2])};
+    int idx[3], step[3];
+    /* the start voxel: where the clipped segment begins (rounded into a
+     * neighbour, the walk leaves it at once with a run of 0) */
+    for (int k = 0; k < 3; k++) {
+        double p = d[k] == 0.0 ? o[k] : o[k] + t0 * d[k];
+        idx[k] = clampi((p - f->box.lo.v[k]) / f->cs[k], f->n[k]);
+        step[k] = d[k] > 0.0 ? 1 : d[k] < 0.0 ? -1 : 0;
+    }
+    double t = t0;
+    /* each step leaves a voxel through one face: at most the sum of the
+     * counts (plus slack for rounding at the start) */
+    for (int guard = f->n[0] + f->n[1] + f->n[2] + 4; guard > 0; guard--) {
+        double tn[3];
+        for (int k = 0; k < 3; k++) {
+            if (!step[k]) {
+                tn[k] = INFINITY;
+                continue;
+            }
+            double plane = f->box.lo.v[k] + (double)(idx[k] + (step[k] > 0)) * f->cs[k];
+            tn[k] = (plane - o[k]) / d[k];
+        }
+        int k = tn[0] <= tn[1] ? (tn[0] <= tn[2] ? 0 : 2) : (tn[1] <= tn[2] ? 1 : 2);
+        double te = tn[k] < t1 ? tn[k] : t1;
+        if (te > t) {
+            double *a =
+                acc + 3 * (((size_t)idx[0] * (size_t)f->n[1] + (size_t)idx[1]) * (size_t)f->n[2] +
+                           (size_t)idx[2]);
+            double dt = te - t;
+            a[0] += dt * ad[0];
+            a[1] += dt * ad[1];
+            a[2] += dt * ad[2];
+            t = te;
+        }
+        if (t >= t1)
+            break;
+        idx[k] += step[k];
+        if (idx[k] < 0 || idx[k] >= f->n[k])
+            break;
+    }
+}
+
+bsp_status kd_flux_build(kd_flux *f, const bsp_box *box, const kd_flux_segment *seg, size_t n,
+                         size_t cells, bsp_error *err)
+{
+    memset(f, 0, sizeof *f);
+    f->box = *box;
+    double e[3];
+    for (int k = 0; k < 3; k++) {
+        e[k] = box->hi.v[k] - box->lo.v[k];
+        if (!(e[k] >= 0.0) || !isfinite(e[k]))
+            e[k] = 0.0;
+    }
+    grid_shape(e, cells ? cells : 1, f->n);
+    for (int k = 0; k < 3; k++)
+        f->cs[k] = e[k] > 0.0 ? e[k] / f->n[k] : 1.0; /* a flat axis: any positive size */
+    size_t nvox = (size_t)f->n[0] * (size_t)f->n[1] * (size_t)f->n[2];
+    double *acc = calloc(3 * nvox, sizeof *acc);
+    if (!acc)
+        return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    for (size_t i = 0; i < n; i++)
+        walk_segment(f, &seg[i], acc);
+
+    /* phi_k times a k-face's voxel area = run * |d_k| / (V / (cs_u cs_v)) =
+     * run * |d_k| / cs_k; then 2D prefix sums per slab */
+    for (int k = 0; k < 3; k++) {
+        int u = (k + 1) % 3, v = (k + 2) % 3;
+        size_t nu = (size_t)f->n[u], nv = (size_t)f->n[v], nk = (size_t)f->n[k];
+        double *p = calloc(nk * (nu + 1) * (nv + 1), sizeof *p);
+        if (!p) {
+            free(acc);
+            kd_flux_free(f);
+            return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+        }
+        f->pre[k] = p;
+        for (size_t i = 0; i < nk; i++) {
+            double *slab = p + i * (nu + 1) * (nv + 1);
+            for (size_t a = 0; a < nu; a++)
+                for (size_t b = 0; b < nv; b++) {
+                    size_t c[3];
+                    c[k] = i, c[u] = a, c[v] = b;
+                    size_t vox = (c[0] * (size_t)f->n[1] + c[1]) * (size_t)f->n[2] + c[2];
+                    double x = acc[3 * vox + (size_t)k] / f->cs[k];
+                    slab[(a + 1) * (nv + 1) + b + 1] = x + slab[a * (nv + 1) + b + 1] +
+                                                       slab[(a + 1) * (nv + 1) + b] -
+                                                       slab[a * (nv + 1) + b];
+                }
+        }
+    }
+    free(acc);
+    f->total = kd_flux_measure(f, box);
+    return BSP_OK;
+}
+
+/* Where X lies on axis K of the grid: voxel *I and fraction *W in it. */
+static inline void locate(const kd_flux *f, int k, double x, int *i, double *w)
+{
+    double g = (x - f->box.lo.v[k]) / f->cs[k];
+    int n = f->n[k];
+    if (!(g > 0.0)) { /* also NaN */
+        *i = 0;
+        *w = 0.0;
+    } else if (g >= (double)n) {
+        *i = n - 1;
+        *w = 1.0;
+    } else {
+        *i = (int)g;
+        *w = g - (double)*i;
+    }
+}
+
+double kd_flux_measure(const kd_flux *f, const bsp_box *b)
+{
+    double sum = 0.0;
+    for (int k = 0; k < 3; k++) {
+        int u = (k + 1) % 3, v = (k + 2) % 3;
+        size_t nv1 = (size_t)f->n[v] + 1, slab = ((size_t)f->n[u] + 1) * nv1;
+        int a0, a1, b0, b1;
+        double wa0, wa1, wb0, wb1;
+        locate(f, u, b->lo.v[u], &a0, &wa0);
+        locate(f, u, b->hi.v[u], &a1, &wa1);
+        locate(f, v, b->lo.v[v], &b0, &wb0);
+        locate(f, v, b->hi.v[v], &b1, &wb1);
+        for (int side = 0; side < 2; side++) {
+            double x = side ? b->hi.v[k] : b->lo.v[k];
+            double g = (x - f->box.lo.v[k]) / f->cs[k];
+            int i = clampi(g, f->n[k]);
+            const double *p = f->pre[k] + (size_t)i * slab;
+            /* S(a, w_a; b, w_b): the integral up to a point, bilinear in its voxel */
+#define S(a, wa, bb, wb)                                                                           \
+    ((1.0 - (wa)) * ((1.0 - (wb)) * p[(size_t)(a)*nv1 + (size_t)(bb)] +                            \
+                     (wb)*p[(size_t)(a)*nv1 + (size_t)(bb) + 1]) +                                 \
+     (wa) * ((1.0 - (wb)) * p[((size_t)(a) + 1) * nv1 + (size_t)(bb)] +                            \
+             (wb)*p[((size_t)(a) + 1) * nv1 + (size_t)(bb) + 1]))
+            double face = S(a1, wa1, b1, wb1) - S(a0, wa0, b1, wb1) - S(a1, wa1, b0, wb0) +
+                          S(a0, wa0, b0, wb0);
+#undef S
+            sum += face > 0.0 ? face : 0.0;
+        }
+    }
+    return 0.5 * sum;
+}
+
+void kd_flux_free(kd_flux *f)
+{
+    for (int k = 0; k < 3; k++) {
+        free(f->pre[k]);
+        f->pre[k] = NULL;
+    }
+}

@@ -1,0 +1,114 @@
+/*
+ * kd_prepass.c — sah-mixed's pre-pass: a small Whitted render through the
+ * tree's view that tells the build how the render's rays divide into
+ * classes and where the non-primary ones run.
+ *
+ * The render runs on a `sah` tree (the rays and their hits do not depend on
+ * the structure, and it is the cheapest to build and to trace) on one
+ * thread, so the rays are logged in one fixed order and the sampled measure
+ * — sums of floating-point runs — is the same on every run: the tree does
+ * not depend on the thread count.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "accel/kd_prepass.h"
+#include "bspray/render.h"
+
+typedef struct ray_log {
+    uint64_t count[BSP_RAY_CLASS_COUNT];
+    bsp_ray *rays; /* non-primary rays, when kept */
+    size_t n, cap;
+    int keep, nomem;
+} ray_log;
+
+static void log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
+{
+    ray_log *l = ctx;
+    if ((unsigned)cls < BSP_RAY_CLASS_COUNT)
+        l->count[cls]++;
+    if (!l->keep || cls == BSP_RAY_PRIMARY || l->nomem)
+        return;
+    if (l->n == l->cap) {
+        size_t ncap = l->cap ? 2 * l->cap : 4096;
+        bsp_ray *nr = realloc(l->rays, ncap * sizeof *nr);
+        if (!nr) {
+            l->nomem = 1;
+            return;
+        }
+        l->rays = nr;
+        l->cap = ncap;
+    }
+    l->rays[l->n++] = *ray;
+}
+
+bsp_status kd_mixed_prepass(const bsp_scene *scene, const bsp_camera *cam, int max_depth,
+                            int build_threads, double *share, kd_flux_segment **seg, size_t *nseg,
+                            bsp_error *err)
+{
+    bsp_build_options bo;
+    bsp_build_options_defaults(&bo);
+    bo.kind = BSP_ACCEL_SAH;
+    bo.threads = build_threads;
+    bsp_accel *a = NULL;
+    bsp_status st = bsp_accel_build(scene, &bo, &a, err);
+    if (st != BSP_OK)
+        return st;
+    ray_log log;
+    memset(&log, 0, sizeof log);
+    log.keep = seg != NULL;
+    bsp_render_options ro;
+    bsp_render_options_defaults(&ro);
+    ro.camera = cam;
+    if (max_depth > 0)
+        ro.max_depth = max_depth;
+    ro.threads = 1; /* one order of the logged rays: see the top of the file */
+    ro.ray_log = log_ray;
+    ro.ray_log_ctx = &log;
+    bsp_image *img = NULL;
+    st = bsp_render(a, &ro, &img, NULL, err);
+    bsp_image_destroy(img);
+    if (st == BSP_OK && log.nomem)
+        st = error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    kd_flux_segment *out = NULL;
+    if (st == BSP_OK && seg) {
+        out = malloc((log.n ? log.n : 1) * sizeof *out);
+        bsp_query *q = out ? bsp_query_create(a) : NULL;
+        if (!q) {
+            st = error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+        } else {
+            /* a segment ends where its ray stops: the closest hit (a shadow ray
+             * stops at its first occluder, the nearest it meets), or tmax */
+            for (size_t i = 0; i < log.n; i++) {
+                const bsp_ray *r = &log.rays[i];
+                bsp_hit h;
+                double end = bsp_intersect(a, q, r, &h) ? h.t : r->tmax;
+                out[i] = (kd_flux_segment){r->org, r->dir, r->tmin, end};
+            }
+            bsp_query_destroy(q);
+        }
+    }
+    free(log.rays);
+    bsp_accel_destroy(a);
+    if (st != BSP_OK) {
+        free(out);
+        return st;
+    }
+    uint64_t all = 0;
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++)
+        all += log.count[c];
+    *share = all ? (double)log.count[BSP_RAY_PRIMARY] / (double)all : 1.0;
+    if (seg) {
+        *seg = out;
+        *nseg = log.n;
+    }
+    return BSP_OK;
+}
+
+/* render.h: the pre-pass without the segments */
+bsp_status bsp_measure_primary_share(const bsp_scene *scene, const bsp_camera *camera,
+                                     int max_depth, double *share, bsp_error *err)
+{
+    return kd_mixed_prepass(scene, camera, max_depth, 0, share, NULL, NULL, err);
+}
