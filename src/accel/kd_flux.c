@@ -31,7 +31,7 @@ static void grid_shape(const double e[3], size_t cells, int n[3])
 
 static int clampi(double x, int n)
 {
-    return x < 0.0 ? 0 : x >= (double)n ? n - 1 : (int)x;
+    return !(x >= 0.0) ? 0 : x >= (double)n ? n - 1 : (int)x; /* NaN: 0 */
 }
 
 /* Adds segment S's runs through the voxels to ACC (3 sums per voxel:

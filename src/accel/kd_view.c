@@ -514,6 +514,9 @@ bsp_status kd_build_view(kd_tree *t, const bsp_scene *scene, const bsp_build_opt
     if (share != 0.0 && !(share > 0.0 && share <= 1.0))
         return error_set(err, BSP_ERR_INVALID, NULL, 0,
                          "sah-mixed: the share of primary rays %g is outside (0, 1]", share);
+    double root_sa = kd_surface_area(&t->box);
+    if (!(root_sa > 0.0 && isfinite(root_sa)))
+        sampled = 0; /* an empty (or point-like) scene box: nothing to sample */
     kd_flux_segment *seg = NULL;
     size_t nseg = 0;
     if (share == 0.0 || sampled) {
@@ -530,7 +533,6 @@ bsp_status kd_build_view(kd_tree *t, const bsp_scene *scene, const bsp_build_opt
     memset(&m, 0, sizeof m);
     m.view = v;
     m.w_view = share / (4.0 * v.hx * v.hy);
-    double root_sa = kd_surface_area(&t->box);
     double floor_share = 1.0;
     kd_flux flux;
     memset(&flux, 0, sizeof flux);
