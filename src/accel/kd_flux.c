@@ -171,32 +171,34 @@ static inline void locate(const kd_flux *f, int k, double x, int *i, double *w)
     }
 }
 
+/* The integral of slab P's density up to the point at voxels A, B with
+ * fractions WA, WB: bilinear in the prefix sums of the voxel's corners. */
+static inline double prefix_at(const double *p, size_t nv1, int a, double wa, int b, double wb)
+{
+    const double *r0 = p + (size_t)a * nv1 + (size_t)b, *r1 = r0 + nv1;
+    return (1.0 - wa) * ((1.0 - wb) * r0[0] + wb * r0[1]) + wa * ((1.0 - wb) * r1[0] + wb * r1[1]);
+}
+
 double kd_flux_measure(const kd_flux *f, const bsp_box *b)
 {
+    /* each bound located once: as a face's slab (its voxel) and as a corner
+     * of the faces of the other two axes */
+    int at[3][2];
+    double w[3][2];
+    for (int k = 0; k < 3; k++) {
+        locate(f, k, b->lo.v[k], &at[k][0], &w[k][0]);
+        locate(f, k, b->hi.v[k], &at[k][1], &w[k][1]);
+    }
     double sum = 0.0;
     for (int k = 0; k < 3; k++) {
         int u = (k + 1) % 3, v = (k + 2) % 3;
         size_t nv1 = (size_t)f->n[v] + 1, slab = ((size_t)f->n[u] + 1) * nv1;
-        int a0, a1, b0, b1;
-        double wa0, wa1, wb0, wb1;
-        locate(f, u, b->lo.v[u], &a0, &wa0);
-        locate(f, u, b->hi.v[u], &a1, &wa1);
-        locate(f, v, b->lo.v[v], &b0, &wb0);
-        locate(f, v, b->hi.v[v], &b1, &wb1);
         for (int side = 0; side < 2; side++) {
-            double x = side ? b->hi.v[k] : b->lo.v[k];
-            double g = (x - f->box.lo.v[k]) / f->cs[k];
-            int i = clampi(g, f->n[k]);
-            const double *p = f->pre[k] + (size_t)i * slab;
-            /* S(a, w_a; b, w_b): the integral up to a point, bilinear in its voxel */
-#define S(a, wa, bb, wb)                                                                           \
-    ((1.0 - (wa)) * ((1.0 - (wb)) * p[(size_t)(a)*nv1 + (size_t)(bb)] +                            \
-                     (wb)*p[(size_t)(a)*nv1 + (size_t)(bb) + 1]) +                                 \
-     (wa) * ((1.0 - (wb)) * p[((size_t)(a) + 1) * nv1 + (size_t)(bb)] +                            \
-             (wb)*p[((size_t)(a) + 1) * nv1 + (size_t)(bb) + 1]))
-            double face = S(a1, wa1, b1, wb1) - S(a0, wa0, b1, wb1) - S(a1, wa1, b0, wb0) +
-                          S(a0, wa0, b0, wb0);
-#undef S
+            const double *p = f->pre[k] + (size_t)at[k][side] * slab;
+            double face = prefix_at(p, nv1, at[u][1], w[u][1], at[v][1], w[v][1]) -
+                          prefix_at(p, nv1, at[u][0], w[u][0], at[v][1], w[v][1]) -
+                          prefix_at(p, nv1, at[u][1], w[u][1], at[v][0], w[v][0]) +
+                          prefix_at(p, nv1, at[u][0], w[u][0], at[v][0], w[v][0]);
             sum += face > 0.0 ? face : 0.0;
         }
     }
