@@ -91,13 +91,14 @@ static inline int clip_slab(double o, double d, double inv, double lo, double hi
 
 /* Sets up the entry point EN and the exit point EX (node NULL) of RAY's
  * segment inside the root box; returns 0 when they do not meet. Zero
- * direction components are handled by the origin test alone. */
-static inline int start(const kd_tree *t, const bsp_ray *ray, const trav_ray *r, double *en,
-                        exit_point *ex)
+ * direction components are handled by the origin test alone. Inlined into
+ * both queries (as a call: 2-9 more instructions per primary ray). */
+static inline __attribute__((always_inline)) int
+start(const kd_tree *t, const bsp_ray *ray, const trav_ray *r, double *en, exit_point *ex)
 {
     const bsp_box *box = &t->box;
     double a = ray->tmin, b = ray->tmax;
-    if (box_is_empty(*box) || !clip_slab(r->o[0], r->d[0], r->inv[0], box->lo.x, box->hi.x, &a, &b) ||
+    if (t->box_empty || !clip_slab(r->o[0], r->d[0], r->inv[0], box->lo.x, box->hi.x, &a, &b) ||
         !clip_slab(r->o[1], r->d[1], r->inv[1], box->lo.y, box->hi.y, &a, &b) ||
         !clip_slab(r->o[2], r->d[2], r->inv[2], box->lo.z, box->hi.z, &a, &b) || !(a <= b))
         return 0;

@@ -404,6 +404,7 @@ bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
         kd_destroy(t);
         return st;
     }
+    t->box_empty = box_is_empty(t->box);
     a->ops = &kd_ops;
     a->impl = t;
     return BSP_OK;

@@ -75,6 +75,8 @@ typedef struct kd_tree {
     double pad;     /* bounds padding used for assignment */
     int max_depth;  /* the enforced limit (sizes the traversal stack) */
     int max_leaf_prims;
+    int box_empty; /* traversal: box is empty (no live primitive), every ray misses;
+                      set by kd_accel_build once the tree is built */
 } kd_tree;
 
 /* --- used by builders ------------------------------------------------------ */
