@@ -82,7 +82,7 @@ TEST(cli_bench_paper_counts)
     snprintf(json[0], sizeof json[0], "%s/paper_persp.json", harness_tmpdir());
     snprintf(json[1], sizeof json[1], "%s/paper_ortho.json", harness_tmpdir());
     snprintf(cmd, sizeof cmd,
-             "%s bench --paper spd:rings:1 --accel sah,sah-per,sah-par --validate 200 --quiet "
+             "%s bench --paper spd:rings:1 --accel sah,sah-per,sah-par --validate 200 --repeat 1 --quiet "
              "--csv %s",
              harness_cli(), csv);
     int st;

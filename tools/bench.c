@@ -103,7 +103,7 @@ static void log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
 
 /* --- timed shooting of a ray set -------------------------------------------- */
 
-static double thread_cpu_seconds(void)
+double bench_cpu_seconds(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
@@ -156,7 +156,7 @@ static double shoot_rate(const bsp_accel *accel, const ray_set *set, int any, in
     /* one thread: its CPU time, steadier than the wall clock on a shared
      * machine (time the thread spends descheduled is not its own) */
     const int cpu = threads == 1;
-    double t0 = cpu ? thread_cpu_seconds() : now_seconds();
+    double t0 = cpu ? bench_cpu_seconds() : now_seconds();
     int started = 1;
     for (; started < threads; started++)
         if (pthread_create(&tids[started], NULL, shoot_main, &jobs[started]) != 0)
@@ -166,7 +166,7 @@ static double shoot_rate(const bsp_accel *accel, const ray_set *set, int any, in
         pthread_join(tids[t], NULL);
     for (int t = started; t < threads; t++) /* threads that could not start */
         shoot_main(&jobs[t]);
-    double dt = (cpu ? thread_cpu_seconds() : now_seconds()) - t0;
+    double dt = (cpu ? bench_cpu_seconds() : now_seconds()) - t0;
     return dt > 0 ? (double)set->n / dt * 1e-6 : 0.0;
 }
 

@@ -15,6 +15,9 @@
 long bench_validate(const bsp_accel *accel, const bsp_accel *naive, const bsp_scene *scene,
                     int nrand, char *what, size_t what_size);
 
+/* The CPU time of the calling thread, in seconds. */
+double bench_cpu_seconds(void);
+
 /* The default scenes (NULL-terminated): lattice, rings, tree, then every
  * other SPD scene. */
 extern const char *const bench_default_scenes[];
