@@ -240,9 +240,44 @@ static int clipped_events(const sah_build *b, uint32_t p, const bsp_box *cb, con
 }
 
 /* Merges the sorted NEW[0..NN) into the sorted DST[0..A), in place from the
- * back (DST has room for A + NN). */
+ * back (DST has room for A + NN). Few new keys (under 1/4 of the list): each
+ * is placed by a galloping search back from the last placed one, and the
+ * block of old keys above it moved at once — each old key moved once, as in
+ * the plain merge, without a compare and branch per key. */
 static void merge_back(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn)
 {
+    if (nn * 4 < a) {
+        for (; nn > 0; nn--) {
+            const uint64_t x = nw[nn - 1];
+            size_t hi = a, step = 1; /* dst[hi..a) > x */
+            while (hi > 0 && dst[hi - 1] > x) {
+                size_t lo = hi > step ? hi - step : 0;
+                if (dst[lo] > x) {
+                    hi = lo;
+                    step *= 2;
+                    continue;
+                }
+                while (lo + 1 < hi) { /* dst[lo] < x < dst[hi] (keys are distinct) */
+                    size_t mid = lo + (hi - lo) / 2;
+                    if (dst[mid] > x)
+                        hi = mid;
+                    else
+                        lo = mid;
+                }
+                break;
+            }
+            size_t len = a - hi;
+            uint64_t *from = dst + hi, *to = dst + hi + nn;
+            if (len > 16)
+                memmove(to, from, len * sizeof *dst);
+            else
+                while (len-- > 0)
+                    to[len] = from[len];
+            dst[hi + nn - 1] = x;
+            a = hi;
+        }
+        return;
+    }
     size_t o = a + nn;
     while (nn > 0) {
         if (a > 0 && dst[a - 1] > nw[nn - 1])
