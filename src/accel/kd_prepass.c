@@ -51,6 +51,13 @@ bsp_status kd_mixed_prepass(const bsp_scene *scene, const bsp_camera *cam, int m
     bsp_build_options_defaults(&bo);
     bo.kind = BSP_ACCEL_SAH;
     bo.threads = build_threads;
+    /* A tree for a few ten thousand rays: depth at most log2 N (about one
+     * primitive per leaf), below the everyday 8 + 1.3 log2 N, builds 3-4x
+     * faster on the SPD scenes. The rays and where they stop are exact, so
+     * the pre-pass's figures (share, segments) do not depend on the tree. */
+    size_t n = bsp_scene_prim_count(scene);
+    int depth = (int)ceil(log2((double)n + 1.0));
+    bo.max_depth = depth < 4 ? 4 : depth < BSP_KD_MAX_DEPTH_LIMIT ? depth : BSP_KD_MAX_DEPTH_LIMIT;
     bsp_accel *a = NULL;
     bsp_status st = bsp_accel_build(scene, &bo, &a, err);
     if (st != BSP_OK)
