@@ -8,8 +8,9 @@
  * where no split pays) — mailboxes on. For every scene and
  * rule: build, validate against the naive method (as plain bench does), then
  * render and count; the renders of a scene's rules take turns, --repeat
- * rounds of them, and each rule's best time is reported. The paper counts primary rays; a second block has
- * the same figures over all the render's rays, a third the times. sah-par
+ * rounds of them, and each rule's best time is reported. The paper counts
+ * primary rays; a second block has the same figures over all the render's
+ * rays, a third the times. sah-par
  * trees are built for, and rendered with, the orthographic camera of the
  * same view (its own rays); an `sah` tree rendered with those rays is the
  * reference next to it. The paper's own numbers sit in rows of their own.
