@@ -141,6 +141,36 @@ void bsp_scene_background(const bsp_scene *scene, double rgb[3]);
 size_t bsp_scene_warning_count(const bsp_scene *scene);
 const char *bsp_scene_warning(const bsp_scene *scene, size_t i);
 
+/* --- Reading primitive geometry (export, comparison with other tracers) ----
+ *
+ * Each returns BSP_OK and writes its outputs, or BSP_ERR_INVALID and writes
+ * nothing when PRIM is out of range, is of another kind (a dropped primitive
+ * is of no kind) or I is not a vertex index of the primitive. The values are
+ * those of the surface bspray intersects, read back from its precomputed
+ * records: spheres and polygons of four or more vertices give back the input
+ * bit for bit; a three-vertex polygon or patch is stored as v0 and the edges
+ * v1 - v0, v2 - v0, so its vertices 1 and 2 come back as v0 + (v1 - v0), and a
+ * cone's apex as base + unit axis * length: equal to the input up to a
+ * rounding or two (exactly equal when those operations are exact). */
+
+/* A sphere's centre and radius (negative when the input's was: NFF's "only
+ * the inside is visible"). Any output may be NULL. */
+bsp_status bsp_scene_prim_sphere(const bsp_scene *scene, size_t prim, bsp_vec3 *center,
+                                 double *radius);
+/* A cone's base centre and radius and apex centre and radius (both radii
+ * negative, or one negative and one -0.0, when the input's were). Any output
+ * may be NULL. */
+bsp_status bsp_scene_prim_cone(const bsp_scene *scene, size_t prim, bsp_vec3 *base,
+                               double *base_radius, bsp_vec3 *apex, double *apex_radius);
+/* Vertex I (0 <= I < bsp_scene_prim_vertex_count) of a polygon or patch, in
+ * input order. */
+bsp_status bsp_scene_prim_vertex(const bsp_scene *scene, size_t prim, size_t i,
+                                 bsp_vec3 *vertex);
+/* The normal given with vertex I of a patch, normalised to unit length as the
+ * scene stores it (polygons have none: BSP_ERR_INVALID). */
+bsp_status bsp_scene_prim_vertex_normal(const bsp_scene *scene, size_t prim, size_t i,
+                                        bsp_vec3 *normal);
+
 /* Name of a primitive kind ("sphere", "polygon", "patch", "cone", "dropped"). */
 const char *bsp_prim_kind_name(bsp_prim_kind kind);
 
