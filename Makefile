@@ -5,6 +5,8 @@
 #   make test       build and run every test (ends with "N passed, N failed")
 #   make asan-test  the same suite under AddressSanitizer + UndefinedBehaviorSanitizer
 #                   (fewer random rays: BSPRAY_TEST_QUICK=1)
+#   make embree-compare  build/bspray-embree: primary-ray throughput against Intel Embree 3
+#                   on the same rays (needs libembree-dev; docs/embree.md). Not part of `all`.
 #   make clean
 
 CC      ?= gcc
@@ -23,12 +25,15 @@ TEST_SRC := $(sort $(wildcard tests/*.c))
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/obj/%.o)
 TEST_OBJ := $(TEST_SRC:%.c=$(BUILD)/obj/%.o)
 CLI_OBJ  := $(patsubst %.c,$(BUILD)/obj/%.o,$(sort $(wildcard tools/*.c)))
+# tools/embree/ is outside that wildcard: only `make embree-compare` needs Embree
+EMBREE_OBJ := $(BUILD)/obj/tools/embree/compare.o
 
 LIB   := $(BUILD)/libbspray.a
 CLI   := $(BUILD)/bspray
 TESTS := $(BUILD)/bspray_tests
+EMBREE_CLI := $(BUILD)/bspray-embree
 
-.PHONY: all run test asan-test clean
+.PHONY: all run test asan-test clean embree-compare
 all: $(LIB) $(CLI)
 
 $(BUILD)/obj/%.o: %.c
@@ -45,6 +50,11 @@ $(CLI): $(CLI_OBJ) $(LIB)
 
 $(TESTS): $(TEST_OBJ) $(LIB)
 	$(CC) $(ALL_CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+embree-compare: $(EMBREE_CLI)
+
+$(EMBREE_CLI): $(EMBREE_OBJ) $(LIB)
+	$(CC) $(ALL_CFLAGS) $(LDFLAGS) -o $@ $^ -lembree3 $(LDLIBS)
 
 # The default scene: SPD balls (sphereflake), 513x513 rays (SPD protocol), depth 4.
 run: $(CLI)
@@ -65,4 +75,4 @@ asan-test:
 clean:
 	rm -rf build build-asan build-clang out
 
--include $(LIB_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(CLI_OBJ:.o=.d)
+-include $(LIB_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(CLI_OBJ:.o=.d) $(EMBREE_OBJ:.o=.d)
