@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bspray/bspray.h"
 #include "harness.h"
 
 static int count_lines(const char *s)
@@ -188,4 +189,63 @@ TEST(cli_nff_corpus_exit_status)
     }
     closedir(d);
     CHECK(n >= 20);
+}
+
+/* The value after LABEL in stats output (e.g. "N_V"), or -1. */
+static long stats_field(const char *out, const char *label)
+{
+    const char *p = strstr(out, label);
+    return p ? strtol(p + strlen(label), NULL, 10) : -1;
+}
+
+/* --costs and --empty-bonus reach the builder: the CLI's tree has the leaves
+ * and references of the tree the API builds with the same costs (an
+ * independent build), which differ from the default tree's; bad lists are
+ * usage errors (exit 2) that name the option. */
+TEST(cli_costs_reach_the_builder)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load("spd:lattice:2", &s, &err) == BSP_OK);
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.sah_costs.traversal = 0.3;
+    o.sah_costs.cone = 4.0;
+    o.sah_empty_bonus = -1.0; /* --empty-bonus 0: none */
+    bsp_accel *a = NULL;
+    REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+    bsp_tree_stats want;
+    bsp_accel_tree_stats(a, &want);
+    bsp_accel_destroy(a);
+    bsp_build_options_defaults(&o);
+    REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+    bsp_tree_stats plain;
+    bsp_accel_tree_stats(a, &plain);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+    CHECK(want.leaves != plain.leaves); /* the costs matter on this scene */
+
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd,
+             "%s stats spd:lattice:2 --accel sah --costs traversal=0.3,cone=4 --empty-bonus 0",
+             harness_cli());
+    int st;
+    char *out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    CHECK(stats_field(out, "N_V") == (long)want.leaves);
+    CHECK(stats_field(out, "N_OIV") == (long)want.references);
+    free(out);
+
+    const char *bad[] = {"--costs sphere", "--costs sphere=0", "--costs bogus=1",
+                         "--costs sphere=1,", "--costs cone=inf", "--empty-bonus 1"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        snprintf(cmd, sizeof cmd, "%s stats spd:lattice:2 --accel sah %s 2>&1", harness_cli(),
+                 bad[i]);
+        out = harness_run(cmd, &st);
+        REQUIRE(out);
+        CHECK_EQ_INT(st, 2);
+        CHECK(strstr(out, "--costs") || strstr(out, "--empty-bonus"));
+        free(out);
+    }
 }

@@ -672,7 +672,8 @@ static int cmd_calibrate(int argc, char **argv)
                "Measure the cost of a kd-tree traversal step and of one ray-primitive test for\n"
                "each primitive kind on this machine (ns), and print them with their ratios to\n"
                "the traversal step: the T_i of the SAH cost model. The built-in defaults were\n"
-               "measured this way (src/accel/kd_cost.c). Run it on a quiet machine.\n");
+               "measured this way (src/accel/kd_cost.c). Run it on a quiet machine; the\n"
+               "last line gives the --costs option that builds with the measured ratios.\n");
         return 0;
     }
     if (argc > 1)
@@ -691,6 +692,10 @@ static int cmd_calibrate(int argc, char **argv)
     printf("| polygon, per vertex | %.2f | %.3f |\n", c.polygon_vertex,
            c.polygon_vertex / c.traversal);
     printf("| cone | %.2f | %.3f |\n", c.cone, c.cone / c.traversal);
+    printf("\nto build with these costs: --costs sphere=%.3g,triangle=%.3g,polygon=%.3g,"
+           "vertex=%.3g,cone=%.3g\n",
+           c.sphere / c.traversal, c.triangle / c.traversal, c.polygon_base / c.traversal,
+           c.polygon_vertex / c.traversal, c.cone / c.traversal);
     return 0;
 }
 

@@ -3,6 +3,7 @@
  */
 #include <errno.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -179,6 +180,56 @@ static int positive_finite(double x)
     return x > 0.0 && isfinite(x);
 }
 
+/* The SAH cost names of --costs, with the field each sets. */
+static double *cost_field(bsp_sah_costs *c, const char *name, size_t len)
+{
+    static const struct {
+        const char *name;
+        size_t offset;
+    } fields[] = {{"traversal", offsetof(bsp_sah_costs, traversal)},
+                  {"sphere", offsetof(bsp_sah_costs, sphere)},
+                  {"triangle", offsetof(bsp_sah_costs, triangle)},
+                  {"polygon", offsetof(bsp_sah_costs, polygon_base)},
+                  {"vertex", offsetof(bsp_sah_costs, polygon_vertex)},
+                  {"cone", offsetof(bsp_sah_costs, cone)}};
+    for (size_t i = 0; i < sizeof fields / sizeof fields[0]; i++)
+        if (strlen(fields[i].name) == len && !strncmp(fields[i].name, name, len))
+            return (double *)((char *)c + fields[i].offset);
+    return NULL;
+}
+
+/* --costs NAME=X[,NAME=X...]: the SAH's C_trav and T_i, each positive and
+ * finite; names not given keep their defaults (0 in the options). */
+static void parse_costs(args *a, const char *opt, bsp_sah_costs *c)
+{
+    const char *v = opt_value(a, opt), *p = v;
+    bsp_sah_costs out = *c;
+    while (*p) {
+        const char *eq = strchr(p, '='), *comma = strchr(p, ',');
+        size_t len = eq ? (size_t)(eq - p) : 0;
+        double *f = eq && (!comma || eq < comma) ? cost_field(&out, p, len) : NULL;
+        if (!f)
+            die_usage(a->usage,
+                      "--costs: expected NAME=X[,NAME=X...] with NAME one of traversal, "
+                      "sphere, triangle, polygon, vertex, cone; got '%s'",
+                      v);
+        char *end;
+        double x = strtod(eq + 1, &end);
+        if (end == eq + 1 || (*end && *end != ',') || !(x > 0.0 && isfinite(x)))
+            die_usage(a->usage, "--costs: every cost must be a positive number; got '%s'", v);
+        *f = x;
+        p = *end == ',' ? end + 1 : end;
+        if (*end == ',' && !*p)
+            die_usage(a->usage, "--costs: trailing comma in '%s'", v);
+    }
+    *c = out;
+}
+
+static int in_bonus_range(double x)
+{
+    return x >= 0.0 && x < 1.0;
+}
+
 const char build_args_help[] =
     "  --accel METHOD     acceleration method: sah (default), sah-per, sah-par, sah-mixed,\n"
     "                     kaplan, naive (sah-per/-par/-mixed build for the camera's rays)\n"
@@ -194,7 +245,13 @@ const char build_args_help[] =
     "                     (default: uniform lines, the surface area) or sampled (their\n"
     "                     density in the pre-pass; see docs/modified-sah.md)\n"
     "  --build-threads N  sah family: build threads (default: every core); the tree is\n"
-    "                     the same for any N\n";
+    "                     the same for any N\n"
+    "  --costs LIST       sah family: the cost model, NAME=X,... relative to one traversal\n"
+    "                     step: traversal (C_trav, default 1), sphere, triangle, polygon\n"
+    "                     and vertex (an n-gon costs polygon + n * vertex), cone; the\n"
+    "                     defaults are `bspray calibrate`'s ratios (docs/kdtree.md)\n"
+    "  --empty-bonus F    sah family: a split with an empty side costs (1 - F) times as\n"
+    "                     much, F in [0, 1) (default 0.1; 0: no bonus)\n";
 
 int parse_build_arg(args *a, bsp_build_options *opts)
 {
@@ -213,6 +270,11 @@ int parse_build_arg(args *a, bsp_build_options *opts)
         opts->threads = parse_int(a, s, 1, 256);
     } else if (!strcmp(s, "--mixed-model")) {
         opts->mixed_model = parse_mixed_model(a, s);
+    } else if (!strcmp(s, "--costs")) {
+        parse_costs(a, s, &opts->sah_costs);
+    } else if (!strcmp(s, "--empty-bonus")) {
+        double f = parse_real(a, s, opt_value(a, s), in_bonus_range, "a number in [0, 1)");
+        opts->sah_empty_bonus = f > 0.0 ? f : -1.0; /* the options' 0 means the default */
     } else if (!strcmp(s, "--mixed-share")) {
         opts->mixed_primary_share =
             parse_real(a, s, opt_value(a, s), in_share_range, "a number in (0, 1]");
