@@ -102,10 +102,13 @@ start(const kd_tree *t, const bsp_ray *ray, const trav_ray *r, double *en, exit_
         !clip_slab(r->o[1], r->d[1], r->inv[1], box->lo.y, box->hi.y, &a, &b) ||
         !clip_slab(r->o[2], r->d[2], r->inv[2], box->lo.z, box->hi.z, &a, &b) || !(a <= b))
         return 0;
-    for (int k = 0; k < 3; k++) {
-        en[k] = r->o[k] + r->d[k] * a;
-        ex->pb[k] = r->o[k] + r->d[k] * b;
-    }
+    /* unrolled (the loop was not: 40 instructions per ray) */
+    en[0] = r->o[0] + r->d[0] * a;
+    en[1] = r->o[1] + r->d[1] * a;
+    en[2] = r->o[2] + r->d[2] * a;
+    ex->pb[0] = r->o[0] + r->d[0] * b;
+    ex->pb[1] = r->o[1] + r->d[1] * b;
+    ex->pb[2] = r->o[2] + r->d[2] * b;
     ex->t = b;
     ex->node = NULL;
     return 1;
@@ -124,9 +127,29 @@ static inline uint32_t mailbox_next(bsp_query *q, size_t nprims)
     return q->ray_id;
 }
 
+/* Pushes the exit point where the ray crosses the plane S on AXIS (the
+ * endpoints lie strictly on opposite sides of it, so d[axis] != 0), with the
+ * far child FAR to visit after it. */
+static inline __attribute__((always_inline)) exit_point *
+push(exit_point *ex, const trav_ray *r, unsigned axis, double s, const kd_node *far)
+{
+    double tp = (s - r->o[axis]) * r->inv[axis];
+    if (__builtin_expect(!(fabs(tp) < INFINITY), 0))
+        tp = (s - r->o[axis]) / r->d[axis]; /* a subnormal d: 1 / d overflowed */
+    ex++;
+    ex->t = tp;
+    ex->node = far;
+    ex->pb[0] = r->o[0] + r->d[0] * tp;
+    ex->pb[1] = r->o[1] + r->d[1] * tp;
+    ex->pb[2] = r->o[2] + r->d[2] * tp;
+    ex->pb[axis] = s;
+    return ex;
+}
+
 /* Descends from N to a leaf between the entry point EN and the exit point
  * *EX (the top of the stack), pushing the far children and counting interior
- * nodes in *STEPS; returns the leaf. */
+ * nodes in *STEPS; returns the leaf. Each "both" case pushes its own far
+ * child (no near/far selection: 3 moves per push fewer). */
 static inline __attribute__((always_inline)) const kd_node *
 descend(const kd_node *nodes, const kd_node *n, const trav_ray *r, const double *en,
         exit_point **ex_io, uint64_t *steps)
@@ -140,38 +163,24 @@ descend(const kd_node *nodes, const kd_node *n, const trav_ray *r, const double 
         double s = (double)n->u.split;
         double A = en[axis], B = ex->pb[axis];
         const kd_node *left = nodes + (bits >> 2);
-        const kd_node *near_c, *far_c;
         if (A <= s) {
             if (B <= s) { /* N1, N2, N3, P5, Z2, Z3: the left side only */
                 n = left;
                 continue;
             }
-            if (A == s) { /* Z1: starts on the plane, goes right */
-                n = left + 1;
+            n = left + 1;
+            if (A == s) /* Z1: starts on the plane, goes right */
                 continue;
-            }
-            near_c = left; /* N4 */
-            far_c = left + 1;
+            /* N4: A < s < B, left then right */
+            ex = push(ex, r, axis, s, n);
+            n = left;
         } else {
-            if (B > s) { /* P1, P2, P3, N5: the right side only */
-                n = left + 1;
+            n = left + 1;
+            if (B > s) /* P1, P2, P3, N5: the right side only */
                 continue;
-            }
-            near_c = left + 1; /* P4 */
-            far_c = left;
+            /* P4: B <= s < A, right then left; B < s: A and B differ */
+            ex = push(ex, r, axis, s, left);
         }
-        /* A and B lie strictly on opposite sides: d[axis] != 0 */
-        double tp = (s - r->o[axis]) * r->inv[axis];
-        if (__builtin_expect(!(fabs(tp) < INFINITY), 0))
-            tp = (s - r->o[axis]) / r->d[axis]; /* a subnormal d: 1 / d overflowed */
-        ex++;
-        ex->t = tp;
-        ex->node = far_c;
-        ex->pb[0] = r->o[0] + r->d[0] * tp;
-        ex->pb[1] = r->o[1] + r->d[1] * tp;
-        ex->pb[2] = r->o[2] + r->d[2] * tp;
-        ex->pb[axis] = s;
-        n = near_c;
     }
     *steps += k;
     *ex_io = ex;
