@@ -32,7 +32,8 @@
 static const char bench_usage[] =
     "bspray bench [SCENE...] [--accel LIST] [--res N] [--depth N] [--threads N]\n"
     "                        [--mailbox on|off] [--validate N] [--csv FILE] [--quiet]\n"
-    "       bspray bench --paper [SCENE...] [--accel LIST] [--csv FILE] ...  (see --paper --help)";
+    "       bspray bench --paper [SCENE...] [--accel LIST] [--csv FILE] ...  (see --paper --help)\n"
+    "       bspray bench --scaling [SCENE...] [--accel LIST] [--repeat N] ...  (see --scaling --help)";
 
 /* The default scene list of bench and bench --paper: every SPD database at
  * its default size, teapot at the size of the SPD Readme and Havran's
@@ -445,6 +446,8 @@ int cmd_bench(int argc, char **argv)
     for (int i = 1; i < argc; i++)
         if (!strcmp(argv[i], "--paper"))
             return bench_paper(argc, argv);
+        else if (!strcmp(argv[i], "--scaling"))
+            return bench_scaling(argc, argv);
     args a = {argc, 1, argv, bench_usage};
     bench_opts o;
     memset(&o, 0, sizeof o);

@@ -1,5 +1,6 @@
 /*
- * bench.h — what `bspray bench` and its --paper mode (paper.c) share.
+ * bench.h — what `bspray bench` and its --paper (paper.c) and --scaling
+ * (bench_scaling.c) modes share.
  */
 #ifndef BSPRAY_TOOLS_BENCH_H
 #define BSPRAY_TOOLS_BENCH_H
@@ -24,5 +25,13 @@ extern const char *const bench_default_scenes[];
 
 /* `bspray bench --paper ...`: the paper's Table 1 (paper.c). */
 int bench_paper(int argc, char **argv);
+
+/* The default scenes of --scaling (NULL-terminated): two generators from
+ * ~10^4 to ~10^6 primitives. */
+extern const char *const bench_scaling_default_scenes[];
+
+/* `bspray bench --scaling ...`: build time against the number of primitives
+ * (bench_scaling.c). */
+int bench_scaling(int argc, char **argv);
 
 #endif /* BSPRAY_TOOLS_BENCH_H */

@@ -1,0 +1,390 @@
+/*
+ * bench_scaling.c — `bspray bench --scaling`: how the build time grows with
+ * the number of primitives (issue #3: SAH construction in O(N log N), build
+ * time per primitive roughly flat from 10^4 to 10^6 primitives, at least one
+ * million primitives per second on one thread).
+ *
+ * For every scene x method: the best of --repeat builds on one thread, timed
+ * by the CPU time of the building (calling) thread, which a shared machine
+ * disturbs less than the wall clock; then as many builds on --threads
+ * threads, timed by the wall clock (the same tree), and the tree's figures.
+ * The trees are not validated here (plain `bspray bench` does that; a naive
+ * reference on 10^6 primitives would take hours). A second table gives, per
+ * generator (the scene name without its size factor) and method, the growth
+ * of µs per primitive from its smallest to its largest scene next to the
+ * growth of log N: an O(N log N) build grows like log N, an O(N) build stays
+ * flat, an O(N log^2 N) build grows like its square.
+ */
+#include <errno.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "bench.h"
+#include "cli.h"
+
+static const char scaling_usage[] =
+    "bspray bench --scaling [SCENE...] [--accel LIST] [--repeat N] [--threads N]\n"
+    "                       [--csv FILE] [--quiet]";
+
+/* Two generators from ~10^4 to ~10^6 primitives: sphereflakes (spheres) and
+ * the Sierpinski tetrahedron (triangles). */
+const char *const bench_scaling_default_scenes[] = {
+    "spd:balls:4", "spd:balls:5", "spd:balls:6",  "spd:tetra:7",
+    "spd:tetra:8", "spd:tetra:9", "spd:tetra:10", NULL};
+
+/* Scenes above this many primitives get at most SCALING_BIG_REPEAT builds
+ * per thread count unless --repeat is given. */
+#define SCALING_BIG_PRIMS 500000
+#define SCALING_BIG_REPEAT 1
+
+#define MAX_KINDS BSP_ACCEL_KIND_COUNT
+
+typedef struct scaling_opts {
+    bsp_accel_kind kinds[MAX_KINDS];
+    int nkinds;
+    int repeat, repeat_given, threads, quiet;
+} scaling_opts;
+
+/* The figures of one scene x method. */
+typedef struct scaling_row {
+    const char *scene;
+    bsp_accel_kind kind;
+    size_t n;
+    int builds;         /* builds per thread count */
+    double t1_cpu;      /* best build, 1 thread, its CPU time */
+    double t1_wall;     /* best build, 1 thread, wall clock */
+    double tn_wall;     /* best build, --threads threads, wall clock */
+    bsp_tree_stats tree;
+} scaling_row;
+
+static void print_help(void)
+{
+    printf("usage: %s\n\n"
+           "Build-time scaling of the kd-tree construction: for every scene and method the\n"
+           "build time on one thread, per primitive, and on all threads, with the tree's\n"
+           "figures; then, per generator, how the time per primitive grows from the\n"
+           "smallest to the largest scene (O(N log N): like log N, ~1.5x from 10^4 to 10^6).\n"
+           "Markdown on stdout, progress on stderr. The trees are not validated here\n"
+           "(plain 'bspray bench' does that).\n"
+           "\n"
+           "  SCENE...        scenes (files or spd:NAME[:SIZE]); default: spd:balls:4..6\n"
+           "                  (7,382 to 597,872 spheres) and spd:tetra:7..10 (16,384 to\n"
+           "                  1,048,576 triangles); about 2 minutes on 2 cores\n"
+           "  --accel LIST    comma-separated methods (default sah; kaplan and the view\n"
+           "                  rules sah-per, sah-par, sah-mixed too; not naive)\n"
+           "  --repeat N      the best of N builds per thread count (default 3; scenes of\n"
+           "                  more than %d primitives get %d unless --repeat is given)\n"
+           "  --threads N     the all-threads build uses N threads (default: all cores)\n"
+           "  --csv FILE      also write one CSV row per scene x method\n"
+           "  --quiet         no progress lines on stderr\n"
+           "\n"
+           "Columns (CSV names in brackets):\n"
+           "  N [N]           primitives of the scene\n"
+           "  T_B 1t [T_B_1t] seconds of the best single-threaded build, the CPU time of\n"
+           "                  the building thread\n"
+           "  us/prim [us_per_prim]  T_B 1t per primitive, in microseconds\n"
+           "  Mprim/s [Mprim_per_s]  primitives per second of T_B 1t, in millions\n"
+           "  T_B Nt [T_B_nt] seconds of the best build on N threads, wall clock [threads: N]\n"
+           "  speed-up        T_B Nt against the best single-threaded build's wall time\n"
+           "                  [speedup]; kaplan builds on one thread whatever N\n"
+           "  N_IN, N_V, N_OIV  interior nodes, leaves, primitive references in leaves\n"
+           "  cost [cost]     the finished tree's expected SAH cost\n"
+           "  MB [bytes]      the tree's memory: nodes and leaf index lists\n"
+           "  [builds]        builds timed per thread count\n"
+           "The summary: per generator and method, us/prim of the largest scene over that\n"
+           "of the smallest, next to ln N of the largest over ln N of the smallest.\n",
+           scaling_usage, SCALING_BIG_PRIMS, SCALING_BIG_REPEAT);
+}
+
+/* The best of R->builds builds of KIND on THREADS threads: CPU and wall
+ * seconds into *CPU and *WALL, the tree's figures into R->tree. */
+static void timed_builds(const scaling_opts *o, const bsp_scene *scene, scaling_row *r,
+                         int threads, double *cpu, double *wall)
+{
+    bsp_build_options bo;
+    bsp_build_options_defaults(&bo);
+    bo.kind = r->kind;
+    bo.threads = threads;
+    *cpu = *wall = INFINITY;
+    for (int rep = 0; rep < r->builds; rep++) {
+        if (!o->quiet)
+            fprintf(stderr, "%s: %s (%zu primitives): %s: build %d of %d on %d thread%s\n", prog,
+                    r->scene, r->n, bsp_accel_kind_name(r->kind), rep + 1, r->builds, threads,
+                    threads == 1 ? "" : "s");
+        double c0 = bench_cpu_seconds();
+        bsp_accel *accel = build_accel(scene, &bo);
+        double c = bench_cpu_seconds() - c0;
+        double w = bsp_accel_build_seconds(accel);
+        *cpu = c < *cpu ? c : *cpu;
+        *wall = w < *wall ? w : *wall;
+        if (rep == 0)
+            bsp_accel_tree_stats(accel, &r->tree);
+        bsp_accel_destroy(accel);
+    }
+}
+
+static int builds_in_parallel(bsp_accel_kind k)
+{
+    return k != BSP_ACCEL_NAIVE && k != BSP_ACCEL_KAPLAN;
+}
+
+static void measure(const scaling_opts *o, const bsp_scene *scene, scaling_row *r)
+{
+    r->builds = o->repeat;
+    if (!o->repeat_given && r->n > SCALING_BIG_PRIMS && r->builds > SCALING_BIG_REPEAT)
+        r->builds = SCALING_BIG_REPEAT;
+    timed_builds(o, scene, r, 1, &r->t1_cpu, &r->t1_wall);
+    r->tn_wall = r->t1_wall;
+    if (o->threads > 1 && builds_in_parallel(r->kind)) {
+        double cpu_unused;
+        timed_builds(o, scene, r, o->threads, &cpu_unused, &r->tn_wall);
+    }
+}
+
+static double us_per_prim(const scaling_row *r)
+{
+    return r->n ? r->t1_cpu / (double)r->n * 1e6 : 0.0;
+}
+
+static double mprim_per_s(const scaling_row *r)
+{
+    return r->t1_cpu > 0.0 ? (double)r->n / r->t1_cpu * 1e-6 : 0.0;
+}
+
+static double speedup(const scaling_row *r)
+{
+    return r->tn_wall > 0.0 ? r->t1_wall / r->tn_wall : 0.0;
+}
+
+static void print_header(int threads)
+{
+    printf("| scene | accel | N | T_B 1t [s] | µs/prim | Mprim/s | T_B %dt [s] | speed-up | "
+           "N_IN | N_V | N_OIV | cost | MB |\n",
+           threads);
+    printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+}
+
+static void print_row(const scaling_row *r)
+{
+    printf("| %s | %s | %zu | %.4g | %.3f | %.2f | %.4g | %.2f | %" PRIu64 " | %" PRIu64
+           " | %" PRIu64 " | %.2f | %.2f |\n",
+           r->scene, bsp_accel_kind_name(r->kind), r->n, r->t1_cpu, us_per_prim(r),
+           mprim_per_s(r), r->tn_wall, speedup(r), r->tree.interior_nodes, r->tree.leaves,
+           r->tree.references, r->tree.expected_cost, (double)r->tree.bytes / (1024.0 * 1024.0));
+    fflush(stdout);
+}
+
+static void csv_header(FILE *f)
+{
+    fprintf(f, "scene,accel,N,T_B_1t,us_per_prim,Mprim_per_s,T_B_nt,threads,N_IN,N_V,N_OIV,cost,"
+               "bytes,speedup,builds\n");
+}
+
+static void csv_row(FILE *f, const scaling_row *r, int threads)
+{
+    fprintf(f,
+            "%s,%s,%zu,%.9f,%.6f,%.4f,%.9f,%d,%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%.4f,%" PRIu64
+            ",%.4f,%d\n",
+            r->scene, bsp_accel_kind_name(r->kind), r->n, r->t1_cpu, us_per_prim(r),
+            mprim_per_s(r), r->tn_wall, threads, r->tree.interior_nodes, r->tree.leaves,
+            r->tree.references, r->tree.expected_cost, r->tree.bytes, speedup(r), r->builds);
+    fflush(f);
+}
+
+/* The generator of a scene name: "spd:NAME[:tN]" without its size factor;
+ * a file is its own generator. Into BUF. */
+static const char *generator_of(const char *scene, char *buf, size_t size)
+{
+    snprintf(buf, size, "%s", scene);
+    if (strncmp(buf, "spd:", 4) == 0) {
+        char *colon = strchr(buf + 4, ':');
+        if (colon && colon[1] >= '0' && colon[1] <= '9') {
+            char *next = strchr(colon + 1, ':'); /* ":tN" stays */
+            memmove(colon, next ? next : colon + strlen(colon), strlen(next ? next : "") + 1);
+        }
+    }
+    return buf;
+}
+
+/* Per generator x method with at least two sizes: the growth of µs/prim
+ * from the smallest to the largest scene. */
+static void print_summary(const scaling_row *rows, int nrows)
+{
+    int printed = 0;
+    char *seen = calloc((size_t)nrows + 1, 1);
+    if (!seen)
+        return;
+    for (int i = 0; i < nrows; i++) {
+        if (seen[i])
+            continue;
+        char gi[256], gj[256];
+        generator_of(rows[i].scene, gi, sizeof gi);
+        int lo = i, hi = i, count = 0;
+        for (int j = i; j < nrows; j++) {
+            if (rows[j].kind != rows[i].kind || strcmp(generator_of(rows[j].scene, gj, sizeof gj), gi))
+                continue;
+            seen[j] = 1;
+            count++;
+            if (rows[j].n < rows[lo].n)
+                lo = j;
+            if (rows[j].n > rows[hi].n)
+                hi = j;
+        }
+        if (count < 2 || rows[lo].n == rows[hi].n || rows[lo].n < 2)
+            continue;
+        if (!printed) {
+            printf("\n| generator | accel | N smallest → largest | µs/prim smallest → largest | "
+                   "µs/prim growth | ln N growth |\n");
+            printf("|---|---|---:|---:|---:|---:|\n");
+            printed = 1;
+        }
+        double ua = us_per_prim(&rows[lo]), ub = us_per_prim(&rows[hi]);
+        printf("| %s | %s | %zu → %zu | %.3f → %.3f | %.2fx | %.2fx |\n", gi,
+               bsp_accel_kind_name(rows[i].kind), rows[lo].n, rows[hi].n, ua, ub,
+               ua > 0.0 ? ub / ua : 0.0, log((double)rows[hi].n) / log((double)rows[lo].n));
+    }
+    free(seen);
+}
+
+/* Before a run of minutes: is SCENE an SPD scene of a known name and size
+ * factor, or a readable file? 1, or 0 with a message. The loader checks the
+ * rest (a ":tN" suffix, the file's contents) when the scene's turn comes. */
+static int scene_looks_loadable(const char *scene)
+{
+    if (strncmp(scene, "spd:", 4) == 0) {
+        char name[64];
+        const char *rest = scene + 4;
+        size_t len = strcspn(rest, ":");
+        snprintf(name, sizeof name, "%.*s", (int)(len < sizeof name ? len : sizeof name - 1),
+                 rest);
+        int lo = 0, hi = 0;
+        if (len >= sizeof name || !bsp_spd_scene_sizes(name, NULL, &lo, &hi)) {
+            fprintf(stderr, "%s: %s: unknown SPD scene '%s' (known scenes: %s)\n", prog, scene,
+                    name, bsp_spd_scene_names());
+            return 0;
+        }
+        if (rest[len] == ':' && rest[len + 1] >= '0' && rest[len + 1] <= '9') {
+            char *end;
+            long size = strtol(rest + len + 1, &end, 10);
+            if ((*end == 0 || *end == ':') && (size < lo || size > hi)) {
+                fprintf(stderr, "%s: %s: size factor %ld outside %d..%d of '%s'\n", prog, scene,
+                        size, lo, hi, name);
+                return 0;
+            }
+        }
+        return 1;
+    }
+    FILE *f = fopen(scene, "rb");
+    if (!f) {
+        fprintf(stderr, "%s: %s: cannot open: %s\n", prog, scene, strerror(errno));
+        return 0;
+    }
+    fclose(f);
+    return 1;
+}
+
+int bench_scaling(int argc, char **argv)
+{
+    args a = {argc, 1, argv, scaling_usage};
+    scaling_opts o;
+    memset(&o, 0, sizeof o);
+    o.kinds[o.nkinds++] = BSP_ACCEL_SAH;
+    o.repeat = 3;
+    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+    o.threads = ncpu > 0 ? (int)ncpu : 1;
+    const char *csv_path = NULL;
+    size_t ndefault = 0;
+    while (bench_scaling_default_scenes[ndefault])
+        ndefault++;
+    const char **scenes = calloc((size_t)argc + ndefault + 1, sizeof *scenes);
+    if (!scenes) {
+        fprintf(stderr, "%s: out of memory\n", prog);
+        return EXIT_INPUT;
+    }
+    int nscenes = 0;
+    for (; a.i < argc; a.i++) {
+        const char *s = argv[a.i];
+        if (is_help(s)) {
+            print_help();
+            free(scenes);
+            return 0;
+        } else if (!strcmp(s, "--scaling")) {
+            continue;
+        } else if (!strcmp(s, "--accel")) {
+            o.nkinds = parse_accel_list(&a, opt_value(&a, s), o.kinds, MAX_KINDS);
+            for (int k = 0; k < o.nkinds; k++)
+                if (o.kinds[k] == BSP_ACCEL_NAIVE)
+                    die_usage(a.usage, "%s", "--scaling times tree builds; naive has none");
+        } else if (!strcmp(s, "--repeat")) {
+            o.repeat = parse_int(&a, s, 1, 100);
+            o.repeat_given = 1;
+        } else if (!strcmp(s, "--threads")) {
+            o.threads = parse_int(&a, s, 1, 256);
+        } else if (!strcmp(s, "--csv")) {
+            csv_path = opt_value(&a, s);
+        } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
+            o.quiet = 1;
+        } else if (s[0] == '-' && s[1]) {
+            die_usage(a.usage, "unknown option '%s'", s);
+        } else {
+            scenes[nscenes++] = s;
+        }
+    }
+    if (nscenes == 0)
+        for (size_t i = 0; i < ndefault; i++)
+            scenes[nscenes++] = bench_scaling_default_scenes[i];
+    for (int s = 0; s < nscenes; s++)
+        if (!scene_looks_loadable(scenes[s])) {
+            free(scenes);
+            return EXIT_INPUT;
+        }
+    scaling_row *rows = calloc((size_t)nscenes * (size_t)o.nkinds, sizeof *rows);
+    if (!rows) {
+        fprintf(stderr, "%s: out of memory\n", prog);
+        free(scenes);
+        return EXIT_INPUT;
+    }
+    FILE *csv = NULL;
+    if (csv_path) {
+        if (!(csv = fopen(csv_path, "w"))) {
+            fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, csv_path,
+                    strerror(errno));
+            free(rows);
+            free(scenes);
+            return EXIT_INPUT;
+        }
+        csv_header(csv);
+    }
+    printf("## Build-time scaling (T_B 1t: best single-threaded build, thread CPU time; "
+           "T_B %dt: wall clock)\n\n",
+           o.threads);
+    print_header(o.threads);
+    int nrows = 0;
+    for (int s = 0; s < nscenes; s++) {
+        bsp_scene *scene = load_scene(scenes[s]); /* exits 1 with a message */
+        for (int k = 0; k < o.nkinds; k++) {
+            scaling_row *r = &rows[nrows++];
+            r->scene = scenes[s];
+            r->kind = o.kinds[k];
+            r->n = bsp_scene_prim_count(scene);
+            measure(&o, scene, r);
+            print_row(r);
+            if (csv)
+                csv_row(csv, r, o.threads);
+        }
+        bsp_scene_destroy(scene);
+    }
+    print_summary(rows, nrows);
+    int rc = 0;
+    if (csv && fclose(csv) != 0) {
+        fprintf(stderr, "%s: %s: write failed: %s\n", prog, csv_path, strerror(errno));
+        rc = EXIT_INPUT;
+    }
+    free(rows);
+    free(scenes);
+    return rc;
+}
