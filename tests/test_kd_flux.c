@@ -49,15 +49,41 @@ TEST(flux_measure_counts_one_segment_by_hand)
      * run of 0.5 there, so a face in that voxel sees half a crossing. A face
      * on a voxel boundary takes the density of the voxel above it (so the
      * two children of a split see the same density on their common face):
-     * [3,4] has faces in voxel 3 (1, 1), [2,3] in voxels 2 and 3 (0.5, 1),
+     * [3,4] has faces in voxel 3 (1, 1), [2,3] in voxels 2 and 3 (0.5, 1)
+     * and the segment's end point (1),
      * [1,2] in voxels 1 and 2 (0, 0.5) */
     kd_flux_free(&f);
     kd_flux_segment back = {{{5, 1.5, 2.5}}, {{-2, 0, 0}}, 0.0, 1.25}; /* x from 5 to 2.5 */
     REQUIRE(kd_flux_build(&f, &root, &back, 1, 64, &err) == BSP_OK);
     bsp_box v3 = box(3, 1, 2, 4, 2, 3), v2 = box(2, 1, 2, 3, 2, 3), v1 = box(1, 1, 2, 2, 2, 3);
     CHECK_NEAR(kd_flux_measure(&f, &v3), 1.0, 1e-12);
-    CHECK_NEAR(kd_flux_measure(&f, &v2), 0.75, 1e-12);
+    CHECK_NEAR(kd_flux_measure(&f, &v2), 1.25, 1e-12);
     CHECK_NEAR(kd_flux_measure(&f, &v1), 0.25, 1e-12);
+    kd_flux_free(&f);
+}
+
+/* End points count: a segment meeting a box crosses its surface twice, or
+ * once with one end inside, or has both ends inside — always one segment.
+ * Boxes whose faces lie in voxels the segment does not reach measure that
+ * exactly (crossings alone would give 1/2 and 0). */
+TEST(flux_measure_counts_segments_that_start_or_end_inside)
+{
+    bsp_box root = box(0, 0, 0, 4, 4, 4);
+    kd_flux f;
+    bsp_error err;
+    /* from the middle of voxel (2, 1, 2) along +x out of the grid */
+    kd_flux_segment out = {{{2.5, 1.5, 2.5}}, {{1, 0, 0}}, 0.0, 10.0};
+    REQUIRE(kd_flux_build(&f, &root, &out, 1, 64, &err) == BSP_OK);
+    CHECK_NEAR(kd_flux_measure(&f, &(bsp_box){{{1, 1, 2}}, {{4, 2, 3}}}), 1.0, 1e-12);
+    CHECK_NEAR(kd_flux_measure(&f, &(bsp_box){{{1, 0, 1}}, {{4, 3, 4}}}), 1.0, 1e-12);
+    CHECK_NEAR(kd_flux_measure(&f, &(bsp_box){{{0, 1, 2}}, {{1, 2, 3}}}), 0.0, 1e-12);
+    kd_flux_free(&f);
+    /* wholly inside: from voxel (1, 1, 1) to voxel (2, 1, 1) */
+    kd_flux_segment in = {{{1.5, 1.5, 1.5}}, {{1, 0, 0}}, 0.0, 1.0};
+    REQUIRE(kd_flux_build(&f, &root, &in, 1, 64, &err) == BSP_OK);
+    CHECK_NEAR(f.total, 1.0, 1e-12);
+    CHECK_NEAR(kd_flux_measure(&f, &(bsp_box){{{0, 1, 1}}, {{4, 2, 2}}}), 1.0, 1e-12);
+    CHECK_NEAR(kd_flux_measure(&f, &(bsp_box){{{0, 2, 1}}, {{4, 3, 2}}}), 0.0, 1e-12);
     kd_flux_free(&f);
 }
 

@@ -34,9 +34,15 @@ static int clampi(double x, int n)
     return !(x >= 0.0) ? 0 : x >= (double)n ? n - 1 : (int)x; /* NaN: 0 */
 }
 
+static size_t voxel_index(const kd_flux *f, const int idx[3])
+{
+    return ((size_t)idx[0] * (size_t)f->n[1] + (size_t)idx[1]) * (size_t)f->n[2] + (size_t)idx[2];
+}
+
 /* Adds segment S's runs through the voxels to ACC (3 sums per voxel:
- * run length in t times |d_k|, for k = 0, 1, 2). */
-static void walk_segment(const kd_flux *f, const kd_flux_segment *s, double *acc)
+ * run length in t times |d_k|, for k = 0, 1, 2) and its end points inside
+ * the grid's box to ENDS (a count per voxel). */
+static void walk_segment(const kd_flux *f, const kd_flux_segment *s, double *acc, double *ends)
 {
     double t0 = s->t0, t1 = s->t1;
     const double o[3] = {s->org.x, s->org.y, s->org.z}, d[3] = {s->dir.x, s->dir.y, s->dir.z};
@@ -60,6 +66,8 @@ static void walk_segment(const kd_flux *f, const kd_flux_segment *s, double *acc
     }
     if (!(t0 < t1) || !isfinite(t1))
         return;
+    /* an end point lies inside the box when clipping left its t alone */
+    const int start_inside = t0 == s->t0, end_inside = t1 == s->t1;
     const double ad[3] = {fabs(d[0]), fabs(d[1]), fabs(d[2])};
     int idx[3], step[3];
     /* the start voxel: where the clipped segment begins (rounded into a
@@ -68,6 +76,16 @@ static void walk_segment(const kd_flux *f, const kd_flux_segment *s, double *acc
         double p = d[k] == 0.0 ? o[k] : o[k] + t0 * d[k];
         idx[k] = clampi((p - f->box.lo.v[k]) / f->cs[k], f->n[k]);
         step[k] = d[k] > 0.0 ? 1 : d[k] < 0.0 ? -1 : 0;
+    }
+    if (start_inside)
+        ends[voxel_index(f, idx)] += 1.0;
+    if (end_inside) {
+        int e[3];
+        for (int k = 0; k < 3; k++) {
+            double p = d[k] == 0.0 ? o[k] : o[k] + t1 * d[k];
+            e[k] = clampi((p - f->box.lo.v[k]) / f->cs[k], f->n[k]);
+        }
+        ends[voxel_index(f, e)] += 1.0;
     }
     double t = t0;
     /* each step leaves a voxel through one face: at most the sum of the
@@ -85,9 +103,7 @@ static void walk_segment(const kd_flux *f, const kd_flux_segment *s, double *acc
         int k = tn[0] <= tn[1] ? (tn[0] <= tn[2] ? 0 : 2) : (tn[1] <= tn[2] ? 1 : 2);
         double te = tn[k] < t1 ? tn[k] : t1;
         if (te > t) {
-            double *a =
-                acc + 3 * (((size_t)idx[0] * (size_t)f->n[1] + (size_t)idx[1]) * (size_t)f->n[2] +
-                           (size_t)idx[2]);
+            double *a = acc + 3 * voxel_index(f, idx);
             double dt = te - t;
             a[0] += dt * ad[0];
             a[1] += dt * ad[1];
@@ -117,11 +133,28 @@ bsp_status kd_flux_build(kd_flux *f, const bsp_box *box, const kd_flux_segment *
     for (int k = 0; k < 3; k++)
         f->cs[k] = e[k] > 0.0 ? e[k] / f->n[k] : 1.0; /* a flat axis: any positive size */
     size_t nvox = (size_t)f->n[0] * (size_t)f->n[1] * (size_t)f->n[2];
-    double *acc = calloc(3 * nvox, sizeof *acc);
-    if (!acc)
+    const size_t n0 = (size_t)f->n[0], n1 = (size_t)f->n[1], n2 = (size_t)f->n[2];
+    double *acc = calloc(4 * nvox, sizeof *acc), *ends = acc + 3 * nvox;
+    f->ends = calloc((n0 + 1) * (n1 + 1) * (n2 + 1), sizeof *f->ends);
+    if (!acc || !f->ends) {
+        free(acc);
+        kd_flux_free(f);
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    }
     for (size_t i = 0; i < n; i++)
-        walk_segment(f, &seg[i], acc);
+        walk_segment(f, &seg[i], acc, ends);
+    /* 3D prefix sums of the end points: Q[i][j][l] = the points in the
+     * voxels below i, j, l */
+    for (size_t i = 0; i < n0; i++)
+        for (size_t j = 0; j < n1; j++)
+            for (size_t l = 0; l < n2; l++) {
+#define Q(a, b, c) f->ends[((a) * (n1 + 1) + (b)) * (n2 + 1) + (c)]
+                Q(i + 1, j + 1, l + 1) = ends[(i * n1 + j) * n2 + l] + Q(i, j + 1, l + 1) +
+                                         Q(i + 1, j, l + 1) + Q(i + 1, j + 1, l) -
+                                         Q(i, j, l + 1) - Q(i, j + 1, l) - Q(i + 1, j, l) +
+                                         Q(i, j, l);
+#undef Q
+            }
 
     /* phi_k times a k-face's voxel area = run * |d_k| / (V / (cs_u cs_v)) =
      * run * |d_k| / cs_k; then 2D prefix sums per slab */
@@ -179,6 +212,21 @@ static inline double prefix_at(const double *p, size_t nv1, int a, double wa, in
     return (1.0 - wa) * ((1.0 - wb) * r0[0] + wb * r0[1]) + wa * ((1.0 - wb) * r1[0] + wb * r1[1]);
 }
 
+/* The end points below the point at voxels I[0..2] with fractions W[0..2]:
+ * trilinear in the prefix sums of the voxel's corners. */
+static double ends_below(const kd_flux *f, const int i[3], const double w[3])
+{
+    const size_t s1 = (size_t)f->n[2] + 1, s0 = ((size_t)f->n[1] + 1) * s1;
+    const double *q = f->ends + (size_t)i[0] * s0 + (size_t)i[1] * s1 + (size_t)i[2];
+    double sum = 0.0;
+    for (int c = 0; c < 8; c++) {
+        double wc = (c & 4 ? w[0] : 1.0 - w[0]) * (c & 2 ? w[1] : 1.0 - w[1]) *
+                    (c & 1 ? w[2] : 1.0 - w[2]);
+        sum += wc * q[(c & 4 ? s0 : 0) + (c & 2 ? s1 : 0) + (c & 1)];
+    }
+    return sum;
+}
+
 double kd_flux_measure(const kd_flux *f, const bsp_box *b)
 {
     /* each bound located once: as a face's slab (its voxel) and as a corner
@@ -202,11 +250,26 @@ double kd_flux_measure(const kd_flux *f, const bsp_box *b)
             sum += face > 0.0 ? face : 0.0;
         }
     }
-    return 0.5 * sum;
+    /* the end points inside B: inclusion-exclusion over its 8 corners */
+    double pts = 0.0;
+    for (int c = 0; c < 8; c++) {
+        int i[3];
+        double w3[3];
+        for (int k = 0; k < 3; k++) {
+            int side = c >> (2 - k) & 1;
+            i[k] = at[k][side];
+            w3[k] = w[k][side];
+        }
+        double sign = __builtin_parity((unsigned)c) ? 1.0 : -1.0; /* (-1)^(lows), lows = 3 - highs */
+        pts += sign * ends_below(f, i, w3);
+    }
+    return 0.5 * (sum + (pts > 0.0 ? pts : 0.0));
 }
 
 void kd_flux_free(kd_flux *f)
 {
+    free(f->ends);
+    f->ends = NULL;
     for (int k = 0; k < 3; k++) {
         free(f->pre[k]);
         f->pre[k] = NULL;

@@ -2,10 +2,13 @@
  * kd_flux.h — a measure of boxes by the rays of a sample (sah-mixed's model
  * of the non-primary rays, docs/modified-sah.md).
  *
- * A ray segment that crosses a box enters it through one face and leaves
- * through another, so the number of segments crossing a box B is about half
- * the number of times they cross B's surface (exactly half for segments
- * that neither start nor end inside B). The crossings of a face
+ * A ray segment that meets a convex box B crosses B's surface twice, or
+ * once and has one end point inside B, or has both inside: so the number of
+ * segments meeting B is exactly half the number of surface crossings plus
+ * end points inside B. (The rays of a render start on surfaces — every
+ * shadow ray — and stop at hits, so the end points matter most in the
+ * small cells around the geometry; counting crossings alone would halve
+ * those cells' measure.) The crossings of a face
  * perpendicular to axis k at a point are counted by a density phi_k: the
  * number of segment crossings per unit area of a k-plane there. On a voxel
  * grid over the scene, a segment running a length l through a voxel of
@@ -13,11 +16,13 @@
  * k-plane piece of area a, placed at random in the voxel, is crossed is
  * a l |d_k| / (|d| V)). The measure of B is then
  *
- *     F(B) = 1/2 sum over B's six faces of the integral of phi_k over the face,
+ *     F(B) = 1/2 (sum over B's six faces of the integral of phi_k over the
+ *            face + the integral over B of rho),
  *
- * phi_k piecewise constant by voxel; each face integral is read from 2D
- * prefix sums of the face's slab of voxels (bilinear within a voxel, exact
- * for a piecewise-constant density). For uniformly distributed lines F is
+ * phi_k and rho (end points per unit volume) piecewise constant by voxel;
+ * each face integral is read from 2D prefix sums of the face's slab of
+ * voxels (bilinear within a voxel), the volume integral from 3D prefix sums
+ * (trilinear): exact for piecewise-constant densities. For uniformly distributed lines F is
  * proportional to the surface area; for the rays of a render it follows
  * where they actually run: where they start, end at hits, and bunch
  * towards the lights.
@@ -38,6 +43,8 @@ typedef struct kd_flux {
     bsp_box box;
     int n[3];       /* voxels per axis */
     double cs[3];   /* voxel size per axis (> 0) */
+    double *ends;   /* (n[0] + 1) x (n[1] + 1) x (n[2] + 1) 3D prefix sums of the
+                       segments' end points inside the grid (starts and ends) */
     double *pre[3]; /* axis k, with u = k+1, v = k+2 (mod 3): for slab i < n[k],
                        (n[u] + 1) x (n[v] + 1) sums: pre[k][(i * (n[u] + 1) + a) *
                        (n[v] + 1) + b] = the integral of phi_k over the voxels below
