@@ -237,6 +237,33 @@ TEST(cli_costs_reach_the_builder)
     CHECK(stats_field(out, "N_OIV") == (long)want.references);
     free(out);
 
+    /* bench --scaling takes them too: its CSV's 10th column is N_V */
+    char csv[512];
+    snprintf(csv, sizeof csv, "%s/costs.csv", harness_tmpdir());
+    snprintf(cmd, sizeof cmd,
+             "%s bench --scaling spd:lattice:2 --repeat 1 --quiet --costs traversal=0.3,cone=4 "
+             "--empty-bonus 0 --csv %s",
+             harness_cli(), csv);
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    free(out);
+    FILE *f = fopen(csv, "r");
+    REQUIRE(f);
+    char line[1024];
+    REQUIRE(fgets(line, sizeof line, f)); /* header */
+    CHECK_STR_CONTAINS(line, ",N_IN,N_V,N_OIV,");
+    REQUIRE(fgets(line, sizeof line, f));
+    fclose(f);
+    remove(csv);
+    const char *field = line;
+    for (int i = 0; i < 9 && field; i++) {
+        field = strchr(field, ',');
+        field = field ? field + 1 : NULL;
+    }
+    REQUIRE(field);
+    CHECK(strtol(field, NULL, 10) == (long)want.leaves);
+
     const char *bad[] = {"--costs sphere", "--costs sphere=0", "--costs bogus=1",
                          "--costs sphere=1,", "--costs cone=inf", "--empty-bonus 1"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {

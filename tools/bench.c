@@ -67,6 +67,7 @@ static void print_help(void)
            "  --validate N      random rays compared with naive before timing (default 20000)\n"
            "  --csv FILE        also write one CSV row per scene x method\n"
            "  --quiet           no progress lines on stderr\n"
+           "  --costs LIST, --empty-bonus F  the SAH cost model (see 'bspray render --help')\n"
            "\n"
            "Columns: T_B build seconds on 1 and N threads (the same tree); MB structure size;\n"
            "N_V leaves; N_IT intersection tests and N_TS traversal steps per ray (all rays of\n"
@@ -268,6 +269,7 @@ typedef struct bench_opts {
     int res, depth, threads, mailbox, nvalidate, quiet;
     bsp_accel_kind kinds[BSP_ACCEL_KIND_COUNT];
     int nkinds, kinds_given;
+    cost_args costs; /* --costs, --empty-bonus */
     FILE *csv;
 } bench_opts;
 
@@ -350,6 +352,7 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     bsp_build_options_defaults(&bo);
     bo.kind = kind;
     bo.mailbox = o->mailbox;
+    apply_cost_args(&o->costs, &bo);
     if (!o->quiet)
         fprintf(stderr, "%s: %s: %s: building\n", prog, scene_name, row.method);
     bo.threads = 1; /* T_B is the single-threaded build */
@@ -493,6 +496,8 @@ int cmd_bench(int argc, char **argv)
             csv_path = opt_value(&a, s);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             o.quiet = 1;
+        } else if (parse_cost_arg(&a, &o.costs)) {
+            continue;
         } else if (s[0] == '-' && s[1]) {
             die_usage(a.usage, "unknown option '%s'", s);
         } else {

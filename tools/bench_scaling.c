@@ -47,6 +47,7 @@ typedef struct scaling_opts {
     bsp_accel_kind kinds[MAX_KINDS];
     int nkinds;
     int repeat, repeat_given, threads, quiet;
+    cost_args costs; /* --costs, --empty-bonus */
 } scaling_opts;
 
 /* The figures of one scene x method. */
@@ -81,6 +82,7 @@ static void print_help(void)
            "  --threads N     the all-threads build uses N threads (default: all cores)\n"
            "  --csv FILE      also write one CSV row per scene x method\n"
            "  --quiet         no progress lines on stderr\n"
+           "  --costs LIST, --empty-bonus F  the SAH cost model (see 'bspray render --help')\n"
            "\n"
            "Columns (CSV names in brackets):\n"
            "  N [N]           primitives of the scene\n"
@@ -109,6 +111,7 @@ static void timed_builds(const scaling_opts *o, const bsp_scene *scene, scaling_
     bsp_build_options_defaults(&bo);
     bo.kind = r->kind;
     bo.threads = threads;
+    apply_cost_args(&o->costs, &bo);
     *cpu = *wall = INFINITY;
     for (int rep = 0; rep < r->builds; rep++) {
         if (!o->quiet)
@@ -328,6 +331,8 @@ int bench_scaling(int argc, char **argv)
             csv_path = opt_value(&a, s);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             o.quiet = 1;
+        } else if (parse_cost_arg(&a, &o.costs)) {
+            continue;
         } else if (s[0] == '-' && s[1]) {
             die_usage(a.usage, "unknown option '%s'", s);
         } else {

@@ -230,6 +230,36 @@ static int in_bonus_range(double x)
     return x >= 0.0 && x < 1.0;
 }
 
+#define COST_ARGS_HELP                                                                      \
+    "  --costs LIST       sah family: the cost model, NAME=X,... relative to one traversal\n"  \
+    "                     step: traversal (C_trav, default 1), sphere, triangle, polygon\n"   \
+    "                     and vertex (an n-gon costs polygon + n * vertex), cone; the\n"      \
+    "                     defaults are `bspray calibrate`'s ratios (docs/kdtree.md)\n"        \
+    "  --empty-bonus F    sah family: a split with an empty side costs (1 - F) times as\n"    \
+    "                     much, F in [0, 1) (default 0.1; 0: no bonus)\n"
+
+const char cost_args_help[] = COST_ARGS_HELP;
+
+int parse_cost_arg(args *a, cost_args *c)
+{
+    const char *s = a->argv[a->i];
+    if (!strcmp(s, "--costs")) {
+        parse_costs(a, s, &c->costs);
+    } else if (!strcmp(s, "--empty-bonus")) {
+        double f = parse_real(a, s, opt_value(a, s), in_bonus_range, "a number in [0, 1)");
+        c->empty_bonus = f > 0.0 ? f : -1.0; /* the options' 0 means the default */
+    } else {
+        return 0;
+    }
+    return 1;
+}
+
+void apply_cost_args(const cost_args *c, bsp_build_options *o)
+{
+    o->sah_costs = c->costs;
+    o->sah_empty_bonus = c->empty_bonus;
+}
+
 const char build_args_help[] =
     "  --accel METHOD     acceleration method: sah (default), sah-per, sah-par, sah-mixed,\n"
     "                     kaplan, naive (sah-per/-par/-mixed build for the camera's rays)\n"
@@ -246,12 +276,7 @@ const char build_args_help[] =
     "                     density in the pre-pass; see docs/modified-sah.md)\n"
     "  --build-threads N  sah family: build threads (default: every core); the tree is\n"
     "                     the same for any N\n"
-    "  --costs LIST       sah family: the cost model, NAME=X,... relative to one traversal\n"
-    "                     step: traversal (C_trav, default 1), sphere, triangle, polygon\n"
-    "                     and vertex (an n-gon costs polygon + n * vertex), cone; the\n"
-    "                     defaults are `bspray calibrate`'s ratios (docs/kdtree.md)\n"
-    "  --empty-bonus F    sah family: a split with an empty side costs (1 - F) times as\n"
-    "                     much, F in [0, 1) (default 0.1; 0: no bonus)\n";
+    COST_ARGS_HELP;
 
 int parse_build_arg(args *a, bsp_build_options *opts)
 {
@@ -270,11 +295,10 @@ int parse_build_arg(args *a, bsp_build_options *opts)
         opts->threads = parse_int(a, s, 1, 256);
     } else if (!strcmp(s, "--mixed-model")) {
         opts->mixed_model = parse_mixed_model(a, s);
-    } else if (!strcmp(s, "--costs")) {
-        parse_costs(a, s, &opts->sah_costs);
-    } else if (!strcmp(s, "--empty-bonus")) {
-        double f = parse_real(a, s, opt_value(a, s), in_bonus_range, "a number in [0, 1)");
-        opts->sah_empty_bonus = f > 0.0 ? f : -1.0; /* the options' 0 means the default */
+    } else if (!strcmp(s, "--costs") || !strcmp(s, "--empty-bonus")) {
+        cost_args c = {opts->sah_costs, opts->sah_empty_bonus};
+        parse_cost_arg(a, &c);
+        apply_cost_args(&c, opts);
     } else if (!strcmp(s, "--mixed-share")) {
         opts->mixed_primary_share =
             parse_real(a, s, opt_value(a, s), in_share_range, "a number in (0, 1]");

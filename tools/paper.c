@@ -80,6 +80,7 @@ typedef struct paper_opts {
     bsp_mixed_model mixed_model; /* sah-mixed's model of the other rays */
     paper_rule rules[MAX_RULES];
     int nrules;
+    cost_args costs; /* --costs, --empty-bonus */
 } paper_opts;
 
 static void print_help(void)
@@ -112,7 +113,8 @@ static void print_help(void)
            "                  paper's trees do\n"
            "  --csv FILE      one row per scene x rule x ray set, columns scene, accel, camera,\n"
            "                  rays (primary or all), ScnCov, nrays, N_V, N_IT, N_TS, T_B, T_TR\n"
-           "  --quiet         no progress lines\n",
+           "  --quiet         no progress lines\n"
+           "  --costs LIST, --empty-bonus F  the SAH cost model (see 'bspray render --help')\n",
            paper_usage);
 }
 
@@ -143,6 +145,7 @@ static int build_cell(const paper_opts *o, const char *name, const bsp_scene *sc
     bo.threads = o->threads; /* T_B on as many threads as the render (default 1) */
     bo.mailbox = o->mailbox;
     bo.mixed_model = o->mixed_model;
+    apply_cost_args(&o->costs, &bo);
     if (!o->quiet)
         fprintf(stderr, "%s: %s: %s: building\n", prog, name, r->label);
     bsp_accel *accel = build_accel(scene, &bo);
@@ -495,6 +498,8 @@ int bench_paper(int argc, char **argv)
             free(scenes);
             return 0;
         } else if (!strcmp(s, "--paper")) {
+            continue;
+        } else if (parse_cost_arg(&a, &o.costs)) {
             continue;
         } else if (!strcmp(s, "--accel")) {
             parse_rules(&a, &o);

@@ -62,6 +62,7 @@ static const char viz_help[] =
     "                   plane dwarfs everything else\n"
     "  --threads N      render threads for the background (default: all cores)\n"
     "  --quiet          print nothing but errors\n"
+    "  --costs LIST, --empty-bonus F  the SAH cost model (see 'bspray render --help')\n"
     "  --eye, --at, --dir, --up X,Y,Z   override the camera; --fov DEG its field of view.\n"
     "                   The sah-per, sah-par and sah-mixed trees are built for this view.\n"
     "\n"
@@ -140,6 +141,7 @@ int cmd_viz(int argc, char **argv)
     double zoom = 1.0;
     draw_color_mode mode = DRAW_COLOR_DEPTH;
     view_args view = {0};
+    cost_args costs = {{0}, 0.0};
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {
@@ -173,7 +175,7 @@ int cmd_viz(int argc, char **argv)
             threads = parse_int(&a, s, 1, 256);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             quiet = 1;
-        } else if (parse_view_arg(&a, &view)) {
+        } else if (parse_view_arg(&a, &view) || parse_cost_arg(&a, &costs)) {
             continue;
         } else if (s[0] == '-' && s[1]) {
             die_usage(a.usage, "unknown option '%s'", s);
@@ -225,6 +227,7 @@ int cmd_viz(int argc, char **argv)
         bopts.kind = rows[r].kind;
         bopts.max_depth = max_depth;
         bopts.max_leaf_prims = leaf_size;
+        apply_cost_args(&costs, &bopts);
         rows[r].accel = build_accel(scene, &bopts);
         if (draw_cells_collect(rows[r].accel, &rows[r].cells, &err) != BSP_OK) {
             fprintf(stderr, "%s: %s\n", prog, err.message);
