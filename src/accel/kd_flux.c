@@ -212,18 +212,35 @@ static inline double prefix_at(const double *p, size_t nv1, int a, double wa, in
     return (1.0 - wa) * ((1.0 - wb) * r0[0] + wb * r0[1]) + wa * ((1.0 - wb) * r1[0] + wb * r1[1]);
 }
 
-/* The end points below the point at voxels I[0..2] with fractions W[0..2]:
- * trilinear in the prefix sums of the voxel's corners. */
-static double ends_below(const kd_flux *f, const int i[3], const double w[3])
+/* The end points inside the box whose bounds lie in voxels AT[k][0] (low)
+ * and AT[k][1] (high) at fractions W[k][.]: the prefix sums are trilinear
+ * within a voxel, and inclusion-exclusion over the box's corners makes,
+ * per axis, four (index, coefficient) pairs; the sum runs over their
+ * 4 x 4 x 4 products, the inner axis contiguous in memory. */
+static double ends_inside(const kd_flux *f, const int at[3][2], const double w[3][2])
 {
     const size_t s1 = (size_t)f->n[2] + 1, s0 = ((size_t)f->n[1] + 1) * s1;
-    const double *q = f->ends + (size_t)i[0] * s0 + (size_t)i[1] * s1 + (size_t)i[2];
-    double sum = 0.0;
-    for (int c = 0; c < 8; c++) {
-        double wc = (c & 4 ? w[0] : 1.0 - w[0]) * (c & 2 ? w[1] : 1.0 - w[1]) *
-                    (c & 1 ? w[2] : 1.0 - w[2]);
-        sum += wc * q[(c & 4 ? s0 : 0) + (c & 2 ? s1 : 0) + (c & 1)];
+    size_t ix[3][4];
+    double cf[3][4];
+    for (int k = 0; k < 3; k++) {
+        const size_t stride = k == 0 ? s0 : k == 1 ? s1 : 1;
+        ix[k][0] = (size_t)at[k][0] * stride;
+        ix[k][1] = ix[k][0] + stride;
+        ix[k][2] = (size_t)at[k][1] * stride;
+        ix[k][3] = ix[k][2] + stride;
+        cf[k][0] = -(1.0 - w[k][0]);
+        cf[k][1] = -w[k][0];
+        cf[k][2] = 1.0 - w[k][1];
+        cf[k][3] = w[k][1];
     }
+    double sum = 0.0;
+    for (int a = 0; a < 4; a++)
+        for (int b = 0; b < 4; b++) {
+            const double *q = f->ends + ix[0][a] + ix[1][b];
+            double row = cf[2][0] * q[ix[2][0]] + cf[2][1] * q[ix[2][1]] +
+                         cf[2][2] * q[ix[2][2]] + cf[2][3] * q[ix[2][3]];
+            sum += cf[0][a] * cf[1][b] * row;
+        }
     return sum;
 }
 
@@ -250,19 +267,7 @@ double kd_flux_measure(const kd_flux *f, const bsp_box *b)
             sum += face > 0.0 ? face : 0.0;
         }
     }
-    /* the end points inside B: inclusion-exclusion over its 8 corners */
-    double pts = 0.0;
-    for (int c = 0; c < 8; c++) {
-        int i[3];
-        double w3[3];
-        for (int k = 0; k < 3; k++) {
-            int side = c >> (2 - k) & 1;
-            i[k] = at[k][side];
-            w3[k] = w[k][side];
-        }
-        double sign = __builtin_parity((unsigned)c) ? 1.0 : -1.0; /* (-1)^(lows), lows = 3 - highs */
-        pts += sign * ends_below(f, i, w3);
-    }
+    const double pts = ends_inside(f, at, w);
     return 0.5 * (sum + (pts > 0.0 ? pts : 0.0));
 }
 
