@@ -238,8 +238,6 @@ static int in_bonus_range(double x)
     "  --empty-bonus F    sah family: a split with an empty side costs (1 - F) times as\n"    \
     "                     much, F in [0, 1) (default 0.1; 0: no bonus)\n"
 
-const char cost_args_help[] = COST_ARGS_HELP;
-
 int parse_cost_arg(args *a, cost_args *c)
 {
     const char *s = a->argv[a->i];

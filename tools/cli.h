@@ -55,7 +55,6 @@ typedef struct cost_args {
 int parse_cost_arg(args *a, cost_args *c);
 /* Copies C into the build options O. */
 void apply_cost_args(const cost_args *c, bsp_build_options *o);
-extern const char cost_args_help[];
 
 /* The camera overrides --eye, --at, --dir, --up, --fov and --ortho. */
 typedef struct view_args {
