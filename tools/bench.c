@@ -44,6 +44,24 @@ const char *const bench_default_scenes[] = {
     "spd:mount",   "spd:teapot:12", "spd:tetra", "spd:shells", "spd:jacks",
     "spd:sombrero", "spd:sample", "spd:nurbtst", NULL};
 
+const char **bench_scene_array(int argc, const char *const *defaults)
+{
+    size_t n = 0;
+    while (defaults[n])
+        n++;
+    return calloc((size_t)argc + n + 1, sizeof(const char *));
+}
+
+int bench_scenes_or_defaults(const char **scenes, int n, const char *const *defaults)
+{
+    if (n == 0)
+        while (defaults[n]) {
+            scenes[n] = defaults[n];
+            n++;
+        }
+    return n;
+}
+
 /* naive is benchmarked by default only up to this many primitives */
 #define NAIVE_DEFAULT_MAX_PRIMS 2000
 
@@ -464,10 +482,7 @@ int cmd_bench(int argc, char **argv)
     for (int k = BSP_ACCEL_NAIVE; k <= BSP_ACCEL_SAH; k++)
         o.kinds[o.nkinds++] = (bsp_accel_kind)k;
     const char *csv_path = NULL;
-    size_t ndefault = 0;
-    while (bench_default_scenes[ndefault])
-        ndefault++;
-    const char **scenes = calloc((size_t)argc + ndefault + 1, sizeof *scenes);
+    const char **scenes = bench_scene_array(argc, bench_default_scenes);
     int nscenes = 0;
     if (!scenes) {
         fprintf(stderr, "%s: out of memory\n", prog);
@@ -504,10 +519,7 @@ int cmd_bench(int argc, char **argv)
             scenes[nscenes++] = s;
         }
     }
-    if (nscenes == 0) {
-        for (size_t i = 0; i < ndefault; i++)
-            scenes[nscenes++] = bench_default_scenes[i];
-    }
+    nscenes = bench_scenes_or_defaults(scenes, nscenes, bench_default_scenes);
     if (csv_path) {
         o.csv = fopen(csv_path, "w");
         if (!o.csv) {

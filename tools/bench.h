@@ -23,6 +23,13 @@ double bench_cpu_seconds(void);
  * other SPD scene. */
 extern const char *const bench_default_scenes[];
 
+/* Room for the scenes of a command line of ARGC words, or for DEFAULTS
+ * (NULL-terminated), whichever is more; NULL when out of memory (free()). */
+const char **bench_scene_array(int argc, const char *const *defaults);
+/* N scenes were given in SCENES: when none, copies DEFAULTS there. Returns
+ * the count. */
+int bench_scenes_or_defaults(const char **scenes, int n, const char *const *defaults);
+
 /* `bspray bench --paper ...`: the paper's Table 1 (paper.c). */
 int bench_paper(int argc, char **argv);
 

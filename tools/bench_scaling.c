@@ -300,10 +300,7 @@ int bench_scaling(int argc, char **argv)
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
     o.threads = ncpu > 0 ? (int)ncpu : 1;
     const char *csv_path = NULL;
-    size_t ndefault = 0;
-    while (bench_scaling_default_scenes[ndefault])
-        ndefault++;
-    const char **scenes = calloc((size_t)argc + ndefault + 1, sizeof *scenes);
+    const char **scenes = bench_scene_array(argc, bench_scaling_default_scenes);
     if (!scenes) {
         fprintf(stderr, "%s: out of memory\n", prog);
         return EXIT_INPUT;
@@ -339,9 +336,7 @@ int bench_scaling(int argc, char **argv)
             scenes[nscenes++] = s;
         }
     }
-    if (nscenes == 0)
-        for (size_t i = 0; i < ndefault; i++)
-            scenes[nscenes++] = bench_scaling_default_scenes[i];
+    nscenes = bench_scenes_or_defaults(scenes, nscenes, bench_scaling_default_scenes);
     for (int s = 0; s < nscenes; s++)
         if (!scene_looks_loadable(scenes[s])) {
             free(scenes);

@@ -482,10 +482,7 @@ int bench_paper(int argc, char **argv)
     o.nrules = (int)(sizeof default_rules / sizeof default_rules[0]);
     memcpy(o.rules, default_rules, sizeof default_rules);
     const char *csv_path = NULL;
-    size_t ndefault = 0;
-    while (bench_default_scenes[ndefault])
-        ndefault++;
-    const char **scenes = calloc((size_t)argc + ndefault + 1, sizeof *scenes);
+    const char **scenes = bench_scene_array(argc, bench_default_scenes);
     if (!scenes) {
         fprintf(stderr, "%s: out of memory\n", prog);
         return EXIT_INPUT;
@@ -529,9 +526,7 @@ int bench_paper(int argc, char **argv)
             scenes[nscenes++] = s;
         }
     }
-    if (nscenes == 0)
-        for (size_t i = 0; i < ndefault; i++)
-            scenes[nscenes++] = bench_default_scenes[i];
+    nscenes = bench_scenes_or_defaults(scenes, nscenes, bench_default_scenes);
     FILE *csv = NULL;
     if (csv_path && !(csv = fopen(csv_path, "w"))) {
         fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, csv_path, strerror(errno));
