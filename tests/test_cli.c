@@ -276,3 +276,100 @@ TEST(cli_costs_reach_the_builder)
         free(out);
     }
 }
+
+/* sah-mixed's check through the CLI: render reports which tree it kept
+ * (table and JSON), and the kept tree is the one the C API keeps;
+ * --mixed-check off reports none; bench --paper names the scenes where the
+ * sah tree was kept and its CSV's last column says so; a bad model is a
+ * usage error naming the three models. */
+TEST(cli_mixed_check_reports_the_tree_it_kept)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load("spd:tree:2", &s, &err) == BSP_OK);
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_SAH_MIXED;
+    bsp_accel *a = NULL;
+    REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+    bsp_mixed_check chk;
+    bsp_accel_mixed_check(a, &chk);
+    bsp_tree_stats want;
+    bsp_accel_tree_stats(a, &want);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+    CHECK(chk.ran);
+    const char *kept = chk.kept_sah ? "sah" : "sah-mixed";
+
+    char cmd[1024], json[512], expect[128];
+    snprintf(json, sizeof json, "%s/mixed.json", harness_tmpdir());
+    snprintf(cmd, sizeof cmd,
+             "%s render spd:tree:2 --accel sah-mixed --res 33 --stats-json %s -o %s/mixed.png",
+             harness_cli(), json, harness_tmpdir());
+    int st;
+    char *out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    snprintf(expect, sizeof expect, "| sah-mixed check | kept the %s tree: ", kept);
+    CHECK_STR_CONTAINS(out, expect);
+    char nv[64];
+    snprintf(nv, sizeof nv, "| N_IN / N_V / N_EV / N_OIV | %llu / %llu /",
+             (unsigned long long)want.interior_nodes, (unsigned long long)want.leaves);
+    CHECK_STR_CONTAINS(out, nv);
+    free(out);
+    FILE *f = fopen(json, "r");
+    REQUIRE(f);
+    char buf[8192];
+    size_t n = fread(buf, 1, sizeof buf - 1, f);
+    buf[n] = '\0';
+    fclose(f);
+    snprintf(expect, sizeof expect, "\"mixed_check\": {\"kept\": \"%s\"", kept);
+    CHECK_STR_CONTAINS(buf, expect);
+
+    snprintf(cmd, sizeof cmd,
+             "%s render spd:tree:2 --accel sah-mixed --mixed-check off --res 17 -o %s/mixed.png",
+             harness_cli(), harness_tmpdir());
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    CHECK(strstr(out, "sah-mixed check") == NULL);
+    free(out);
+
+    char csv[512];
+    snprintf(csv, sizeof csv, "%s/mixed.csv", harness_tmpdir());
+    snprintf(cmd, sizeof cmd,
+             "%s bench --paper spd:tree:2 --accel sah,sah-mixed --res 33 --validate 100 "
+             "--repeat 1 --quiet --csv %s",
+             harness_cli(), csv);
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    CHECK_STR_CONTAINS(out, "sah-mixed counted with its check against sah");
+    CHECK_STR_CONTAINS(out, chk.kept_sah ? "kept the sah tree on: spd:tree:2;"
+                                         : "kept the sah tree on: none.");
+    free(out);
+    f = fopen(csv, "r");
+    REQUIRE(f);
+    char line[1024];
+    int rows = 0;
+    REQUIRE(fgets(line, sizeof line, f));
+    CHECK_STR_CONTAINS(line, ",threads,tree");
+    while (fgets(line, sizeof line, f)) {
+        if (strncmp(line, "spd:tree:2,sah-mixed,", 21) != 0)
+            continue;
+        const char *last = strrchr(line, ',');
+        REQUIRE(last);
+        CHECK(strncmp(last + 1, kept, strlen(kept)) == 0 && last[1 + strlen(kept)] == '\n');
+        rows++;
+    }
+    fclose(f);
+    CHECK_EQ_INT(rows, 2); /* primary, all */
+
+    snprintf(cmd, sizeof cmd, "%s render spd:tree:2 --accel sah-mixed --mixed-model exact 2>&1",
+             harness_cli());
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 2);
+    CHECK_STR_CONTAINS(out, "expected surface, sampled or counted, got 'exact'");
+    free(out);
+}

@@ -671,7 +671,7 @@ TEST(sah_pluggable_measure)
         kd_tree_free(t);
         REQUIRE(kd_tree_init(t, s, acc[v]->opts.max_depth, acc[v]->opts.max_leaf_prims));
         long calls = 0;
-        REQUIRE(kd_build_sah_measure(t, s, &acc[v]->opts, area_twice, &calls, &err) == BSP_OK);
+        REQUIRE(kd_build_sah_measure(t, s, &acc[v]->opts, area_twice, &calls, NULL, &err) == BSP_OK);
         CHECK(calls > 2 * (long)bsp_scene_prim_count(s));
         REQUIRE(bsp_accel_check(acc[v], &err) == BSP_OK);
         bsp_accel_tree_stats(acc[v], &twice);

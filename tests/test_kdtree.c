@@ -130,7 +130,32 @@ static int quick_skips_view_variant(const bsp_scene *scene, int kind, int mailbo
            bsp_scene_prim_count(scene) > 2000;
 }
 
-/* Compares every kd rule x mailbox setting with naive on NRAYS rays (see
+/* The kd variants the exactness tests compare with naive: every kd rule
+ * with and without mailboxes, sah-mixed's three models among them (sampled
+ * without mailboxes, surface and counted with them), each sah-mixed tree
+ * kept whatever its check against sah would choose. Fills O[0..n), returns
+ * n (at most KD_VARIANTS_MAX). */
+#define KD_VARIANTS_MAX (2 * BSP_ACCEL_KIND_COUNT + 1)
+static int kd_variants(bsp_build_options *o)
+{
+    int n = 0;
+    for (int k = BSP_ACCEL_KAPLAN; k < BSP_ACCEL_KIND_COUNT; k++) {
+        int nv = k == BSP_ACCEL_SAH_MIXED ? 3 : 2;
+        for (int v = 0; v < nv; v++) {
+            bsp_build_options_defaults(&o[n]);
+            o[n].kind = (bsp_accel_kind)k;
+            o[n].mailbox = v > 0;
+            o[n].mixed_model = v == 0 ? BSP_MIXED_SAMPLED
+                               : v == 1 ? BSP_MIXED_SURFACE
+                                        : BSP_MIXED_COUNTED;
+            o[n].mixed_check = 0;
+            n++;
+        }
+    }
+    return n;
+}
+
+/* Compares every kd variant (kd_variants) with naive on NRAYS rays (see
  * quick_skips_view_variant). */
 static void check_scene(const bsp_scene *scene, const char *name, int nrays, uint64_t seed)
 {
@@ -141,19 +166,15 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
     naive_opts.kind = BSP_ACCEL_NAIVE; /* the reference; the default is a tree */
     REQUIRE(bsp_accel_build(scene, &naive_opts, &naive, &err) == BSP_OK);
     bsp_query *nq = bsp_query_create(naive);
-    enum { MAXV = 2 * BSP_ACCEL_KIND_COUNT };
-    bsp_accel *acc[MAXV];
-    bsp_query *qs[MAXV];
-    int nv = 0;
-    for (int k = BSP_ACCEL_KAPLAN; k < BSP_ACCEL_KIND_COUNT; k++) {
-        for (int mb = 0; mb < 2; mb++) {
-            if (quick_skips_view_variant(scene, k, mb))
+    bsp_accel *acc[KD_VARIANTS_MAX];
+    bsp_query *qs[KD_VARIANTS_MAX];
+    bsp_build_options variants[KD_VARIANTS_MAX];
+    int nvariants = kd_variants(variants), nv = 0;
+    for (int vi = 0; vi < nvariants; vi++) {
+        {
+            bsp_build_options o = variants[vi];
+            if (quick_skips_view_variant(scene, (int)o.kind, o.mailbox))
                 continue;
-            bsp_build_options o;
-            bsp_build_options_defaults(&o);
-            o.kind = (bsp_accel_kind)k;
-            o.mailbox = mb;
-            o.mixed_model = mb ? BSP_MIXED_SURFACE : BSP_MIXED_SAMPLED; /* both of sah-mixed's */
             if (!bsp_scene_camera(scene)) {
                 /* the view rules need a view: one from inside the scene's
                  * box (its cells containing the eye see every ray), looking
@@ -438,7 +459,7 @@ TEST(kd_empty_scene_and_single_primitive)
  * variant's answer against it (test-only: it plugs into accel_internal.h).
  * Each render thread makes its own inner queries (thread-local), registered
  * so that they can be freed afterwards. */
-#define CHECKED_MAX (2 * BSP_ACCEL_KIND_COUNT)
+#define CHECKED_MAX KD_VARIANTS_MAX
 #define CHECKED_MAX_THREADS 64
 
 typedef struct checked_impl {
@@ -515,17 +536,13 @@ static void check_render(const char *spec, int res)
     bsp_build_options_defaults(&naive_opts);
     naive_opts.kind = BSP_ACCEL_NAIVE; /* the reference; the default is a tree */
     REQUIRE(bsp_accel_build(s, &naive_opts, &c.naive, &err) == BSP_OK);
-    for (int k = BSP_ACCEL_KAPLAN; k < BSP_ACCEL_KIND_COUNT && c.nkd + 2 <= CHECKED_MAX; k++)
-        for (int mb = 0; mb < 2; mb++) {
-            bsp_build_options o;
-            bsp_build_options_defaults(&o);
-            o.kind = (bsp_accel_kind)k;
-            o.mailbox = mb;
-            o.mixed_model = mb ? BSP_MIXED_SURFACE : BSP_MIXED_SAMPLED;
-            REQUIRE(bsp_accel_build(s, &o, &c.kd[c.nkd], &err) == BSP_OK);
-            CHECK_MSG(bsp_accel_check(c.kd[c.nkd], &err) == BSP_OK, "%s: %s", spec, err.message);
-            c.nkd++;
-        }
+    bsp_build_options variants[KD_VARIANTS_MAX];
+    int nvariants = kd_variants(variants);
+    for (int vi = 0; vi < nvariants; vi++) {
+        REQUIRE(bsp_accel_build(s, &variants[vi], &c.kd[c.nkd], &err) == BSP_OK);
+        CHECK_MSG(bsp_accel_check(c.kd[c.nkd], &err) == BSP_OK, "%s: %s", spec, err.message);
+        c.nkd++;
+    }
     bsp_accel shell;
     memset(&shell, 0, sizeof shell);
     shell.scene = s;

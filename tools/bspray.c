@@ -75,7 +75,7 @@ static double safe_div(double a, double b)
 
 static void print_stats_table(FILE *f, const char *scene_name, const char *accel_name,
                               const bsp_render_stats *st, int sampling,
-                              const bsp_tree_stats *tree)
+                              const bsp_tree_stats *tree, const bsp_mixed_check *chk)
 {
     const bsp_ray_class_stats *P = &st->cls[BSP_RAY_PRIMARY], *S = &st->cls[BSP_RAY_SHADOW],
                               *R = &st->cls[BSP_RAY_SECONDARY];
@@ -86,6 +86,12 @@ static void print_stats_table(FILE *f, const char *scene_name, const char *accel
     fprintf(f, "| image | %d x %d rays, %s sampling |\n", st->width, st->height,
             sampling == BSP_SAMPLING_SPD ? "SPD corner" : "pixel-centre");
     fprintf(f, "| method | %s, depth %d, %d threads |\n", accel_name, st->max_depth, st->threads);
+    if (chk->ran)
+        fprintf(f,
+                "| sah-mixed check | kept the %s tree: %.3f against %.3f per ray (%" PRIu64
+                " rays) |\n",
+                chk->kept_sah ? "sah" : "sah-mixed", chk->kept_sah ? chk->cost_sah : chk->cost_mixed,
+                chk->kept_sah ? chk->cost_mixed : chk->cost_sah, chk->rays);
     fprintf(f, "| PrimaryRay | %" PRIu64 " |\n", P->rays);
     fprintf(f, "| UsedIntPrimRay | %" PRIu64 " |\n", P->hits);
     fprintf(f, "| ScnCoverage[%%] | %.2f |\n", 100.0 * safe_div((double)P->hits, (double)P->rays));
@@ -135,7 +141,8 @@ static void json_class(FILE *f, const char *name, const bsp_ray_class_stats *c, 
 }
 
 static int write_stats_json(const char *path, const char *scene_name, const char *accel_name,
-                            const bsp_render_stats *st, const bsp_tree_stats *tree)
+                            const bsp_render_stats *st, const bsp_tree_stats *tree,
+                            const bsp_mixed_check *chk)
 {
     FILE *f = fopen(path, "w");
     if (!f) {
@@ -182,6 +189,11 @@ static int write_stats_json(const char *path, const char *scene_name, const char
             tree->interior_nodes, tree->leaves, tree->empty_leaves, tree->references,
             tree->bytes);
     fprintf(f, "  \"T_B\": %.6f,\n  \"T_TR\": %.6f,\n", st->build_seconds, st->render_seconds);
+    if (chk->ran)
+        fprintf(f,
+                "  \"mixed_check\": {\"kept\": \"%s\", \"cost_mixed\": %.6f, \"cost_sah\": %.6f, "
+                "\"rays\": %" PRIu64 "},\n",
+                chk->kept_sah ? "sah" : "sah-mixed", chk->cost_mixed, chk->cost_sah, chk->rays);
     fprintf(f, "  \"classes\": {\n");
     json_class(f, "primary", P, 0);
     json_class(f, "shadow", S, 0);
@@ -282,9 +294,11 @@ static int cmd_render(int argc, char **argv)
         const char *an = bsp_accel_kind_name(bopts.kind);
         bsp_tree_stats tree;
         bsp_accel_tree_stats(accel, &tree);
+        bsp_mixed_check chk;
+        bsp_accel_mixed_check(accel, &chk);
         if (!quiet)
-            print_stats_table(stdout, scene_path, an, &st, ropts.sampling, &tree);
-        if (json_path && !write_stats_json(json_path, scene_path, an, &st, &tree))
+            print_stats_table(stdout, scene_path, an, &st, ropts.sampling, &tree, &chk);
+        if (json_path && !write_stats_json(json_path, scene_path, an, &st, &tree, &chk))
             rc = EXIT_INPUT;
         if (rc == 0 && !quiet)
             fprintf(stderr, "%s: wrote %s\n", prog, out_path);

@@ -62,7 +62,9 @@ bsp_mixed_model parse_mixed_model(args *a, const char *opt)
         return BSP_MIXED_SURFACE;
     if (!strcmp(v, "sampled"))
         return BSP_MIXED_SAMPLED;
-    die_usage(a->usage, "expected surface or sampled, got '%s'", v);
+    if (!strcmp(v, "counted"))
+        return BSP_MIXED_COUNTED;
+    die_usage(a->usage, "expected surface, sampled or counted, got '%s'", v);
     return BSP_MIXED_SURFACE;
 }
 
@@ -269,9 +271,12 @@ const char build_args_help[] =
     "                     where the cost model would make a leaf (the paper's criteria)\n"
     "  --mixed-share F    sah-mixed: share of primary rays among all rays, in (0, 1]\n"
     "                     (default: measured by a 65 x 65 pre-pass)\n"
-    "  --mixed-model M    sah-mixed: how the non-primary rays are modelled: surface\n"
-    "                     (default: uniform lines, the surface area) or sampled (their\n"
-    "                     density in the pre-pass; see docs/modified-sah.md)\n"
+    "  --mixed-model M    sah-mixed: how the non-primary rays are modelled: counted\n"
+    "                     (default: the pre-pass's rays that meet each cell, counted\n"
+    "                     exactly), sampled (their density on a voxel grid) or surface\n"
+    "                     (uniform lines: the surface area); see docs/modified-sah.md\n"
+    "  --mixed-check on|off  sah-mixed: also build the sah tree, shoot a 64 x 64 render's\n"
+    "                     rays through both and keep the cheaper (default on)\n"
     "  --build-threads N  sah family: build threads (default: every core); the tree is\n"
     "                     the same for any N\n"
     COST_ARGS_HELP;
@@ -293,6 +298,8 @@ int parse_build_arg(args *a, bsp_build_options *opts)
         opts->threads = parse_int(a, s, 1, 256);
     } else if (!strcmp(s, "--mixed-model")) {
         opts->mixed_model = parse_mixed_model(a, s);
+    } else if (!strcmp(s, "--mixed-check")) {
+        opts->mixed_check = parse_on_off(a, s);
     } else if (!strcmp(s, "--costs") || !strcmp(s, "--empty-bonus")) {
         cost_args c = {opts->sah_costs, opts->sah_empty_bonus};
         parse_cost_arg(a, &c);

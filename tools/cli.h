@@ -26,7 +26,7 @@ const char *opt_value(args *a, const char *opt);
 /* A whole number in [LO, HI] as the value of OPT, or a usage error. */
 int parse_int(args *a, const char *opt, long lo, long hi);
 int parse_on_off(args *a, const char *opt);
-/* surface or sampled: sah-mixed's model (--mixed-model). */
+/* counted, sampled or surface: sah-mixed's model (--mixed-model). */
 bsp_mixed_model parse_mixed_model(args *a, const char *opt);
 int is_help(const char *s);
 /* A vector "x,y,z" as the value of OPT, or a usage error. */

@@ -28,7 +28,7 @@
 static const char paper_usage[] =
     "bspray bench --paper [SCENE...] [--accel LIST] [--res N] [--depth N] [--threads N]\n"
     "                     [--validate N] [--repeat N] [--mailbox on|off] [--mixed-model M]\n"
-    "                     [--cost-termination] [--csv FILE]\n"
+    "                     [--mixed-check on|off] [--cost-termination] [--csv FILE]\n"
     "                     [--quiet]";
 
 typedef struct paper_rule {
@@ -67,6 +67,7 @@ static const paper_figures *paper_of(const char *scene)
 /* The figures of one scene x rule. */
 typedef struct cell {
     int done;
+    int kept_sah; /* sah-mixed: its check kept the plain sah tree */
     double t_build, t_render;
     bsp_tree_stats tree;
     uint64_t rays_primary, hits_primary, rays_all;
@@ -78,6 +79,7 @@ typedef struct paper_opts {
     int cost_termination; /* 0: split to the limits, as the paper */
     int mailbox;          /* traversal with mailboxes, trees built for them (default 1) */
     bsp_mixed_model mixed_model; /* sah-mixed's model of the other rays */
+    int mixed_check;             /* sah-mixed's check against sah (default 1) */
     paper_rule rules[MAX_RULES];
     int nrules;
     cost_args costs; /* --costs, --empty-bonus */
@@ -106,13 +108,16 @@ static void print_help(void)
            "                  time of each (default 3; on 1 thread CPU time, else wall)\n"
            "  --mailbox on|off  mailboxes in the traversal and in the trees' cost model\n"
            "                  (default on; Havran's reference tables count without them)\n"
-           "  --mixed-model M sah-mixed's model of the non-primary rays: surface (default)\n"
-           "                  or sampled (see 'bspray render --help')\n"
+           "  --mixed-model M sah-mixed's model of the non-primary rays: counted (default),\n"
+           "                  sampled or surface (see 'bspray render --help')\n"
+           "  --mixed-check on|off  sah-mixed keeps the sah tree where a 64 x 64 render's\n"
+           "                  rays cost less on it (default on; see 'bspray render --help')\n"
            "  --cost-termination  SAH trees also make a leaf where no split pays (bspray's\n"
            "                  everyday rule); by default they split until the limits, as the\n"
            "                  paper's trees do\n"
            "  --csv FILE      one row per scene x rule x ray set, columns scene, accel, camera,\n"
-           "                  rays (primary or all), ScnCov, nrays, N_V, N_IT, N_TS, T_B, T_TR\n"
+           "                  rays (primary or all), ScnCov, nrays, N_V, N_IT, N_TS, T_B, T_TR,\n"
+           "                  threads, tree (the rule, or sah where sah-mixed kept sah's tree)\n"
            "  --quiet         no progress lines\n"
            "  --costs LIST, --empty-bonus F  the SAH cost model (see 'bspray render --help')\n",
            paper_usage);
@@ -145,12 +150,16 @@ static int build_cell(const paper_opts *o, const char *name, const bsp_scene *sc
     bo.threads = o->threads; /* T_B on as many threads as the render (default 1) */
     bo.mailbox = o->mailbox;
     bo.mixed_model = o->mixed_model;
+    bo.mixed_check = o->mixed_check;
     apply_cost_args(&o->costs, &bo);
     if (!o->quiet)
         fprintf(stderr, "%s: %s: %s: building\n", prog, name, r->label);
     bsp_accel *accel = build_accel(scene, &bo);
     c->t_build = bsp_accel_build_seconds(accel);
     bsp_accel_tree_stats(accel, &c->tree);
+    bsp_mixed_check chk;
+    bsp_accel_mixed_check(accel, &chk);
+    c->kept_sah = chk.ran && chk.kept_sah;
     char what[256];
     if (bench_validate(accel, naive, scene, o->nvalidate, what, sizeof what) < 0) {
         fprintf(stderr, "%s: %s: %s differs from the naive method on %s; aborting\n", prog, name,
@@ -421,6 +430,15 @@ static void print_tables(const table *t)
     int sah = find_rule(o, BSP_ACCEL_SAH, 0), per = find_rule(o, BSP_ACCEL_SAH_PER, 0);
     int mixed = find_rule(o, BSP_ACCEL_SAH_MIXED, 0), kap = find_rule(o, BSP_ACCEL_KAPLAN, 0);
     int sah_o = find_rule(o, BSP_ACCEL_SAH, 1), par = find_rule(o, BSP_ACCEL_SAH_PAR, 1);
+    if (mixed >= 0 && o->mixed_check) {
+        printf("\nsah-mixed's check (a 64 x 64 render's rays through its tree and the sah tree) "
+               "kept the sah tree on:");
+        int n = 0;
+        for (int s = 0; s < t->nscenes; s++)
+            if (at(t, s, mixed)->kept_sah)
+                printf("%s %s", n++ ? "," : "", t->scenes[s]);
+        printf("%s\n", n ? "; its own tree elsewhere." : " none.");
+    }
     if (sah < 0)
         return;
     printf("\n### Changes against sah (negative: fewer / faster)\n\n");
@@ -449,7 +467,7 @@ static void print_tables(const table *t)
 
 static void csv_rows(FILE *f, const table *t)
 {
-    fprintf(f, "scene,accel,camera,rays,ScnCov,nrays,N_V,N_IT,N_TS,T_B,T_TR,threads\n");
+    fprintf(f, "scene,accel,camera,rays,ScnCov,nrays,N_V,N_IT,N_TS,T_B,T_TR,threads,tree\n");
     for (int s = 0; s < t->nscenes; s++)
         for (int r = 0; r < t->o->nrules; r++) {
             const cell *c = at(t, s, r);
@@ -457,13 +475,13 @@ static void csv_rows(FILE *f, const table *t)
                 continue;
             const paper_rule *pr = &t->o->rules[r];
             for (int all = 0; all < 2; all++)
-                fprintf(f, "%s,%s,%s,%s,%.4f,%" PRIu64 ",%" PRIu64 ",%.4f,%.4f,%.6f,%.6f,%d\n",
+                fprintf(f, "%s,%s,%s,%s,%.4f,%" PRIu64 ",%" PRIu64 ",%.4f,%.4f,%.6f,%.6f,%d,%s\n",
                         t->scenes[s], bsp_accel_kind_name(pr->kind),
                         pr->ortho ? "ortho" : "perspective", all ? "all" : "primary",
                         figure_of(c, F_COV, 0), all ? c->rays_all : c->rays_primary,
                         c->tree.leaves, all ? c->nit_all : c->nit_primary,
                         all ? c->nts_all : c->nts_primary, c->t_build, c->t_render,
-                        t->o->threads);
+                        t->o->threads, c->kept_sah ? "sah" : bsp_accel_kind_name(pr->kind));
         }
 }
 
@@ -478,7 +496,8 @@ int bench_paper(int argc, char **argv)
     o.nvalidate = 5000;
     o.repeat = 3;
     o.mailbox = 1;
-    o.mixed_model = BSP_MIXED_SURFACE;
+    o.mixed_model = BSP_MIXED_COUNTED;
+    o.mixed_check = 1;
     o.nrules = (int)(sizeof default_rules / sizeof default_rules[0]);
     memcpy(o.rules, default_rules, sizeof default_rules);
     const char *csv_path = NULL;
@@ -512,6 +531,8 @@ int bench_paper(int argc, char **argv)
             o.mailbox = parse_on_off(&a, s);
         } else if (!strcmp(s, "--mixed-model")) {
             o.mixed_model = parse_mixed_model(&a, s);
+        } else if (!strcmp(s, "--mixed-check")) {
+            o.mixed_check = parse_on_off(&a, s);
         } else if (!strcmp(s, "--cost-termination")) {
             o.cost_termination = 1;
         } else if (!strcmp(s, "--repeat")) {
@@ -542,10 +563,13 @@ int bench_paper(int argc, char **argv)
         return EXIT_INPUT;
     }
     printf("## Table 1: BSP trees for restricted ray sets (%d x %d rays, ray depth %d, tree "
-           "depth 18, 2 primitives per leaf%s, %s%s)\n",
+           "depth 18, 2 primitives per leaf%s, %s%s%s)\n",
            o.res, o.res, o.depth, o.cost_termination ? ", leaves also by cost" : "",
            o.mailbox ? "mailboxes" : "no mailboxes",
-           o.mixed_model == BSP_MIXED_SAMPLED ? ", sah-mixed sampled" : "");
+           o.mixed_model == BSP_MIXED_SAMPLED   ? ", sah-mixed sampled"
+           : o.mixed_model == BSP_MIXED_SURFACE ? ", sah-mixed surface"
+                                                : ", sah-mixed counted",
+           o.mixed_check ? " with its check against sah" : "");
     int rc = 0;
     for (int s = 0; s < nscenes && rc == 0; s++) {
         bsp_scene *scene = load_scene(scenes[s]);

@@ -81,7 +81,10 @@ typedef enum bsp_mixed_model {
     BSP_MIXED_SURFACE = 0,
     /* by where they actually run: their density, sampled from the pre-pass's
        shadow and secondary rays on a voxel grid (docs/modified-sah.md) */
-    BSP_MIXED_SAMPLED = 1
+    BSP_MIXED_SAMPLED = 1,
+    /* by where they actually run: the number of the pre-pass's shadow and
+       secondary rays that meet each box, counted exactly (docs/modified-sah.md) */
+    BSP_MIXED_COUNTED = 2
 } bsp_mixed_model;
 
 /* Build options; always start from bsp_build_options_defaults(). */
@@ -107,10 +110,27 @@ typedef struct bsp_build_options {
     int threads;             /* sah family: build threads; 0: every online core. The tree
                                 is the same for any count */
     bsp_mixed_model mixed_model; /* sah-mixed: the model of the non-primary rays (default
-                                    BSP_MIXED_SURFACE) */
+                                    BSP_MIXED_COUNTED) */
+    int mixed_check; /* sah-mixed: 1 (default) also builds the plain sah tree of the same
+                        options, measures both on the rays of a 64 x 64 render of the view
+                        and keeps the cheaper (bsp_accel_mixed_check); 0 keeps the
+                        sah-mixed tree whatever it costs */
 } bsp_build_options;
 
 void bsp_build_options_defaults(bsp_build_options *opts);
+
+/* What sah-mixed's check against sah found (bsp_build_options.mixed_check). */
+typedef struct bsp_mixed_check {
+    int ran;           /* 1: the check ran (sah-mixed with mixed_check) */
+    int kept_sah;      /* 1: the plain sah tree measured cheaper and was kept */
+    uint64_t rays;     /* rays of the check's render */
+    double cost_mixed; /* estimated cost per ray of the sah-mixed tree, in traversal steps:
+                          C_trav steps + T tests + T_mb mailbox hits, T the mean T_i */
+    double cost_sah;   /* the same for the plain sah tree */
+} bsp_mixed_check;
+
+/* The check of a sah-mixed accelerator (all zero for other methods). */
+void bsp_accel_mixed_check(const bsp_accel *accel, bsp_mixed_check *out);
 
 /* Measures on this machine, on synthetic random rays, the time in ns of one
  * ray-primitive test per kind (polygons as polygon_base + polygon_vertex * n,

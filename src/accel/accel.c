@@ -7,6 +7,7 @@
 #include <time.h>
 
 #include "accel/kd_cost.h"
+#include "accel/kd_mixed_check.h"
 #include "accel/kd_tree.h"
 
 static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {"naive",   "kaplan",  "sah",
@@ -26,7 +27,8 @@ void bsp_build_options_defaults(bsp_build_options *opts)
     opts->mailbox = 1;
     kd_cost_defaults(&opts->sah_costs);
     opts->sah_empty_bonus = KD_DEFAULT_EMPTY_BONUS;
-    opts->mixed_model = BSP_MIXED_SURFACE;
+    opts->mixed_model = BSP_MIXED_COUNTED;
+    opts->mixed_check = 1;
 }
 
 const char *bsp_accel_kind_name(bsp_accel_kind kind)
@@ -76,6 +78,8 @@ bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts
     case BSP_ACCEL_SAH_PAR:
     case BSP_ACCEL_SAH_MIXED:
         st = kd_accel_build(a, err);
+        if (st == BSP_OK && a->opts.kind == BSP_ACCEL_SAH_MIXED && a->opts.mixed_check)
+            st = kd_mixed_check(a, err);
         break;
     default:
         st = error_set(err, BSP_ERR_INVALID, NULL, 0, "unknown acceleration method %d",
@@ -83,7 +87,7 @@ bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts
         break;
     }
     if (st != BSP_OK) {
-        free(a);
+        bsp_accel_destroy(a);
         return st;
     }
     a->build_seconds = accel_now() - t0;

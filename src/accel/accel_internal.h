@@ -20,6 +20,7 @@ struct bsp_accel {
     const accel_ops *ops;
     void *impl; /* method-specific, owned */
     double build_seconds;
+    bsp_mixed_check check; /* sah-mixed's check against sah (kd_mixed_check.c) */
 };
 
 struct bsp_query {

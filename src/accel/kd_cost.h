@@ -50,12 +50,31 @@ HIDDEN void kd_cost_resolve(const bsp_build_options *o, kd_cost_model *m);
 /* T_i of primitive PRIM (a live one) under costs C. */
 HIDDEN double kd_prim_cost(const bsp_scene *scene, uint32_t prim, const bsp_sah_costs *c);
 
+/* A measure whose context follows the build down the tree (sah-mixed's
+ * counted model, kd_raycount.h): each build thread measures with a context
+ * of its own, made by THREAD_CTX from the shared one, and the builder calls
+ * ENTER with every cell before it measures the cell and the children of its
+ * candidate planes. The measure must still depend on the box alone. */
+typedef struct kd_descent {
+    void *(*thread_ctx)(const void *shared);      /* NULL: out of memory */
+    void (*free_ctx)(void *ctx);
+    int (*enter)(void *ctx, const bsp_box *cell); /* 0: out of memory */
+    /* Forgets what CTX keeps from the cells entered so far: called before
+     * each parallel task, so that a task measures the same whichever thread
+     * runs it and whatever that thread built before (the measure need only
+     * agree up to rounding between what the context keeps and what it
+     * recomputes; the build must not depend on the thread count). */
+    void (*reset)(void *ctx);
+} kd_descent;
+
 /* The SAH builder with a pluggable measure: fills T (already set up by
  * kd_tree_init) over SCENE with the costs and limits of O, measuring
- * probabilities with AREA(box, CTX). kd_build_sah is this with the surface
+ * probabilities with AREA(box, CTX), or with AREA(box, per-thread context)
+ * when DESCENT is not NULL. kd_build_sah is this with the surface
  * area. Deterministic: the same input gives the same node array. */
 HIDDEN bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene,
                                        const bsp_build_options *o, kd_area_fn area,
-                                       const void *ctx, bsp_error *err);
+                                       const void *ctx, const kd_descent *descent,
+                                       bsp_error *err);
 
 #endif /* BSPRAY_ACCEL_KD_COST_H */

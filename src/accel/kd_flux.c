@@ -46,25 +46,10 @@ static void walk_segment(const kd_flux *f, const kd_flux_segment *s, double *acc
 {
     double t0 = s->t0, t1 = s->t1;
     const double o[3] = {s->org.x, s->org.y, s->org.z}, d[3] = {s->dir.x, s->dir.y, s->dir.z};
-    for (int k = 0; k < 3; k++) {
+    for (int k = 0; k < 3; k++)
         if (!isfinite(o[k]) || !isfinite(d[k]))
             return;
-        double lo = f->box.lo.v[k], hi = f->box.hi.v[k];
-        if (d[k] == 0.0) {
-            if (o[k] < lo || o[k] > hi)
-                return;
-            continue;
-        }
-        double ta = (lo - o[k]) / d[k], tb = (hi - o[k]) / d[k];
-        if (ta > tb) {
-            double x = ta;
-            ta = tb;
-            tb = x;
-        }
-        t0 = ta > t0 ? ta : t0;
-        t1 = tb < t1 ? tb : t1;
-    }
-    if (!(t0 < t1) || !isfinite(t1))
+    if (!kd_segment_clip(o, d, &f->box, &t0, &t1) || !(t0 < t1) || !isfinite(t1))
         return;
     /* an end point lies inside the box when clipping left its t alone */
     const int start_inside = t0 == s->t0, end_inside = t1 == s->t1;

@@ -17,11 +17,30 @@
 #include "accel/kd_prepass.h"
 #include "bspray/render.h"
 
+#include "geom/vec.h"
+
+bsp_camera kd_prepass_camera(const bsp_scene *scene, const bsp_build_options *o, int res)
+{
+    bsp_camera cam;
+    if (!o->view.explicit_view) {
+        cam = *bsp_scene_camera(scene);
+    } else {
+        memset(&cam, 0, sizeof cam);
+        cam.from = o->view.eye;
+        cam.at = v3_add(o->view.eye, o->view.dir);
+        cam.up = o->view.up;
+        cam.angle_deg = o->view.fov_deg;
+    }
+    cam.res_x = cam.res_y = res - 1; /* SPD protocol: res rays across */
+    return cam;
+}
+
 typedef struct ray_log {
     uint64_t count[BSP_RAY_CLASS_COUNT];
-    bsp_ray *rays; /* non-primary rays, when kept */
+    bsp_ray *rays; /* the rays kept */
+    uint8_t *cls;  /* their classes, when kept too */
     size_t n, cap;
-    int keep, nomem;
+    int keep, keep_primary, nomem;
 } ray_log;
 
 static void log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
@@ -29,19 +48,64 @@ static void log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
     ray_log *l = ctx;
     if ((unsigned)cls < BSP_RAY_CLASS_COUNT)
         l->count[cls]++;
-    if (!l->keep || cls == BSP_RAY_PRIMARY || l->nomem)
+    if (!l->keep || (cls == BSP_RAY_PRIMARY && !l->keep_primary) || l->nomem)
         return;
     if (l->n == l->cap) {
         size_t ncap = l->cap ? 2 * l->cap : 4096;
         bsp_ray *nr = realloc(l->rays, ncap * sizeof *nr);
-        if (!nr) {
+        if (nr)
+            l->rays = nr;
+        uint8_t *nc = nr && l->keep_primary ? realloc(l->cls, ncap) : NULL;
+        if (nc)
+            l->cls = nc;
+        if (!nr || (l->keep_primary && !nc)) {
             l->nomem = 1;
             return;
         }
-        l->rays = nr;
         l->cap = ncap;
     }
+    if (l->keep_primary)
+        l->cls[l->n] = (uint8_t)cls;
     l->rays[l->n++] = *ray;
+}
+
+/* Renders through A with camera CAM on one thread (one order of the logged
+ * rays), logging into LOG. */
+static bsp_status render_logged(const bsp_accel *a, const bsp_camera *cam, int max_depth,
+                                ray_log *log, bsp_error *err)
+{
+    bsp_render_options ro;
+    bsp_render_options_defaults(&ro);
+    ro.camera = cam;
+    if (max_depth > 0)
+        ro.max_depth = max_depth;
+    ro.threads = 1;
+    ro.ray_log = log_ray;
+    ro.ray_log_ctx = log;
+    bsp_image *img = NULL;
+    bsp_status st = bsp_render(a, &ro, &img, NULL, err);
+    bsp_image_destroy(img);
+    if (st == BSP_OK && log->nomem)
+        st = error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    return st;
+}
+
+bsp_status kd_render_rays(const bsp_accel *accel, const bsp_camera *cam, int max_depth,
+                          bsp_ray **rays, uint8_t **cls, size_t *n, bsp_error *err)
+{
+    ray_log log;
+    memset(&log, 0, sizeof log);
+    log.keep = log.keep_primary = 1;
+    bsp_status st = render_logged(accel, cam, max_depth, &log, err);
+    if (st != BSP_OK) {
+        free(log.rays);
+        free(log.cls);
+        return st;
+    }
+    *rays = log.rays;
+    *cls = log.cls;
+    *n = log.n;
+    return BSP_OK;
 }
 
 bsp_status kd_mixed_prepass(const bsp_scene *scene, const bsp_camera *cam, int max_depth,
@@ -66,19 +130,7 @@ bsp_status kd_mixed_prepass(const bsp_scene *scene, const bsp_camera *cam, int m
     ray_log log;
     memset(&log, 0, sizeof log);
     log.keep = seg != NULL;
-    bsp_render_options ro;
-    bsp_render_options_defaults(&ro);
-    ro.camera = cam;
-    if (max_depth > 0)
-        ro.max_depth = max_depth;
-    ro.threads = 1; /* one order of the logged rays: see the top of the file */
-    ro.ray_log = log_ray;
-    ro.ray_log_ctx = &log;
-    bsp_image *img = NULL;
-    st = bsp_render(a, &ro, &img, NULL, err);
-    bsp_image_destroy(img);
-    if (st == BSP_OK && log.nomem)
-        st = error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    st = render_logged(a, cam, max_depth, &log, err); /* one order: see the top of the file */
     kd_flux_segment *out = NULL;
     if (st == BSP_OK && seg) {
         out = malloc((log.n ? log.n : 1) * sizeof *out);

@@ -5,7 +5,18 @@
 #define BSPRAY_ACCEL_KD_PREPASS_H
 
 #include "accel/kd_flux.h"
+#include "bspray/render.h"
 #include "bspray/scene.h"
+
+/* The camera of O's view (its explicit view, or SCENE's camera, which must
+ * exist) for a render of RES x RES rays. */
+HIDDEN bsp_camera kd_prepass_camera(const bsp_scene *scene, const bsp_build_options *o, int res);
+
+/* Every ray a one-thread Whitted render through ACCEL with camera CAM and
+ * ray depth MAX_DEPTH (0: 4) shoots, in a new array *RAYS (free()) of *N,
+ * with its class in *CLS (free()). */
+HIDDEN bsp_status kd_render_rays(const bsp_accel *accel, const bsp_camera *cam, int max_depth,
+                                 bsp_ray **rays, uint8_t **cls, size_t *n, bsp_error *err);
 
 /* Renders SCENE through CAM (NULL: the scene's; its resolution + 1 rays
  * across) with ray depth MAX_DEPTH (0: 4) on a `sah` tree built on

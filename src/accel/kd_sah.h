@@ -115,6 +115,9 @@ typedef struct sah_build {
     const bsp_scene *scene;
     kd_area_fn area;
     const void *actx;
+    const kd_descent *descent; /* ACTX follows the descent (NULL: ACTX is shared) */
+    const void *shared_actx;   /* with DESCENT: what each thread's ACTX is made from */
+    void *dctx;                /* with DESCENT: this thread's context (ACTX) */
     int surface;        /* AREA is the surface area: evaluated inline */
     int to_limits;      /* split until the depth/leaf-size limits, whatever the cost */
     double ctrav;       /* C_trav */

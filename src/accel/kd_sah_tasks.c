@@ -102,6 +102,8 @@ static void run_task(sah_build *w, sah_task *tk)
     w->cap = tk->cap;
     tk->ev = NULL;
     node_lists L = {0, 2 * tk->n, tk->n, tk->tsum};
+    if (w->descent)
+        w->descent->reset(w->dctx);
     double cost;
     tk->st = kd_sah_build_node(w, 0, tk->cell, L, 6 * tk->n, tk->depth, 0, tk->surface, &cost);
     free(w->ev);
@@ -124,7 +126,9 @@ static void *worker(void *arg)
      * each worker grows its own; the per-primitive inputs stay shared */
     sah_build w = *pool->main;
     w.cls = calloc((size_t)w.spare + 1, 1);
-    while (w.cls) { /* without it, the other workers take the tasks */
+    if (w.descent) /* a measure context of its own */
+        w.actx = w.dctx = w.descent->thread_ctx(w.shared_actx);
+    while (w.cls && (!w.descent || w.dctx)) { /* without it, the other workers take the tasks */
         pthread_mutex_lock(&pool->lock);
         size_t i = pool->next++;
         pthread_mutex_unlock(&pool->lock);
@@ -133,6 +137,8 @@ static void *worker(void *arg)
         run_task(&w, &pool->tasks->v[i]);
     }
     kd_sah_scratch_free(&w);
+    if (w.descent && w.dctx)
+        w.descent->free_ctx(w.dctx);
     return NULL;
 }
 

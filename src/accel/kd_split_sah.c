@@ -305,6 +305,8 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
         return make_leaf(b, node, b->ev + L.base, n);
     if (kd_sah_task_wanted(b, n, bad))
         return kd_sah_defer(b, node, &cell, &L, depth, surface); /* built later, in parallel */
+    if (!surface && b->descent && !b->descent->enter(b->dctx, &cell))
+        return oom(b);
     double area = measure(b, &cell, surface);
     if (!surface && !(area > 0.0)) {
         surface = 1;
@@ -555,7 +557,8 @@ void kd_sah_default_limits(bsp_build_options *o, const bsp_scene *scene)
 }
 
 bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_build_options *o,
-                                kd_area_fn area, const void *ctx, bsp_error *err)
+                                kd_area_fn area, const void *ctx, const kd_descent *descent,
+                                bsp_error *err)
 {
     kd_cost_model cm;
     kd_cost_resolve(o, &cm);
@@ -566,6 +569,8 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     b.scene = scene;
     b.area = area;
     b.actx = ctx;
+    b.descent = descent;
+    b.shared_actx = ctx;
     b.surface = area == kd_area_surface;
     b.to_limits = o->sah_split_to_limits != 0;
     b.ctrav = cm.c.traversal;
@@ -580,6 +585,8 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
         n += scene->prims[p].shape != SHAPE_NONE;
     if (n == 0)
         return BSP_OK; /* the root stays an empty leaf */
+    if (descent && !(b.actx = b.dctx = descent->thread_ctx(ctx)))
+        return oom(&b);
 
     b.cls = calloc(np + 1, 1); /* + 1: the spare slot */
     b.bounds = malloc(np * sizeof *b.bounds);
@@ -684,6 +691,8 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
         st = rt;
 done:
     kd_sah_scratch_free(&b);
+    if (descent)
+        descent->free_ctx(b.dctx);
     free(b.bounds);
     free(b.cost);
     free(b.pclass);
@@ -712,5 +721,5 @@ void kd_sah_scratch_free(sah_build *b)
 bsp_status kd_build_sah(kd_tree *t, const bsp_scene *scene, const bsp_build_options *o,
                         bsp_error *err)
 {
-    return kd_build_sah_measure(t, scene, o, kd_area_surface, NULL, err);
+    return kd_build_sah_measure(t, scene, o, kd_area_surface, NULL, NULL, err);
 }

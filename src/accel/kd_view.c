@@ -369,8 +369,49 @@ double kd_mixed_area(const bsp_box *box, const void *ctx)
 {
     const kd_mixed_measure *m = ctx;
     double a = m->w_view * kd_view_area(box, &m->view) + m->w_surf * kd_surface_area(box);
+    if (m->w_count > 0.0)
+        a += m->w_count * kd_raycount_measure(m->count, box);
     return m->w_flux > 0.0 ? a + m->w_flux * kd_flux_measure(m->flux, box) : a;
 }
+
+/* The counted model's per-thread context: a copy of the shared measure with
+ * a cursor of its own (kd_descent). */
+typedef struct mixed_thread_ctx {
+    kd_mixed_measure m; /* first: the context kd_mixed_area sees */
+    kd_raycount_cursor cursor;
+} mixed_thread_ctx;
+
+static void *mixed_thread_ctx_new(const void *shared)
+{
+    const kd_mixed_measure *sm = shared;
+    mixed_thread_ctx *c = malloc(sizeof *c);
+    if (!c)
+        return NULL;
+    c->m = *sm;
+    kd_raycount_cursor_init(&c->cursor, sm->count->rc);
+    c->m.count = &c->cursor;
+    return c;
+}
+
+static void mixed_thread_ctx_free(void *ctx)
+{
+    mixed_thread_ctx *c = ctx;
+    kd_raycount_cursor_free(&c->cursor);
+    free(c);
+}
+
+static int mixed_enter(void *ctx, const bsp_box *cell)
+{
+    return kd_raycount_enter(&((mixed_thread_ctx *)ctx)->cursor, cell);
+}
+
+static void mixed_reset(void *ctx)
+{
+    kd_raycount_reset(&((mixed_thread_ctx *)ctx)->cursor);
+}
+
+static const kd_descent mixed_counted_descent = {mixed_thread_ctx_new, mixed_thread_ctx_free,
+                                                 mixed_enter, mixed_reset};
 
 /* --- rounding of the measures ------------------------------------------------------------ */
 
@@ -463,29 +504,13 @@ double kd_view_measure_noise(kd_area_fn measure, const void *ctx, const bsp_box 
         return view_noise(ctx, cell, axis, zone);
     if (measure == kd_mixed_area) {
         const kd_mixed_measure *m = ctx;
-        if (m->w_flux > 0.0)
-            return INFINITY; /* the sampled term is not monotone (kd_flux.h) */
+        if (m->w_flux > 0.0 || m->w_count > 0.0)
+            return INFINITY; /* the sampled term is not monotone (kd_flux.h); the
+                                counted one is, but no bound is derived for it yet */
         double dv = view_noise(&m->view, cell, axis, zone);
         return m->w_view * dv + m->w_surf * NOISE_K * DBL_EPSILON * kd_surface_area(cell);
     }
     return INFINITY;
-}
-
-/* The camera of a view, for the renderer's pre-pass. */
-static bsp_camera view_camera(const bsp_scene *scene, const bsp_build_options *o, int res)
-{
-    bsp_camera cam;
-    if (!o->view.explicit_view) {
-        cam = *bsp_scene_camera(scene);
-    } else {
-        memset(&cam, 0, sizeof cam);
-        cam.from = o->view.eye;
-        cam.at = v3_add(o->view.eye, o->view.dir);
-        cam.up = o->view.up;
-        cam.angle_deg = o->view.fov_deg;
-    }
-    cam.res_x = cam.res_y = res - 1; /* SPD protocol: res rays across */
-    return cam;
 }
 
 /* Side of the sah-mixed pre-pass image, in rays. */
@@ -504,9 +529,10 @@ bsp_status kd_build_view(kd_tree *t, const bsp_scene *scene, const bsp_build_opt
     if (st != BSP_OK)
         return st;
     if (o->kind != BSP_ACCEL_SAH_MIXED)
-        return kd_build_sah_measure(t, scene, o, kd_view_area, &v, err);
+        return kd_build_sah_measure(t, scene, o, kd_view_area, &v, NULL, err);
 
-    int sampled = o->mixed_model == BSP_MIXED_SAMPLED;
+    int counted = o->mixed_model == BSP_MIXED_COUNTED;
+    int sampled = o->mixed_model == BSP_MIXED_SAMPLED || counted; /* both sample the rays */
     if (!sampled && o->mixed_model != BSP_MIXED_SURFACE)
         return error_set(err, BSP_ERR_INVALID, NULL, 0, "sah-mixed: unknown model %d",
                          (int)o->mixed_model);
@@ -520,7 +546,7 @@ bsp_status kd_build_view(kd_tree *t, const bsp_scene *scene, const bsp_build_opt
     kd_flux_segment *seg = NULL;
     size_t nseg = 0;
     if (share == 0.0 || sampled) {
-        bsp_camera cam = view_camera(scene, o, MIXED_PREPASS_RES);
+        bsp_camera cam = kd_prepass_camera(scene, o, MIXED_PREPASS_RES);
         double measured;
         st = kd_mixed_prepass(scene, &cam, 0, o->threads, &measured, sampled ? &seg : NULL, &nseg,
                               err);
@@ -536,7 +562,21 @@ bsp_status kd_build_view(kd_tree *t, const bsp_scene *scene, const bsp_build_opt
     double floor_share = 1.0;
     kd_flux flux;
     memset(&flux, 0, sizeof flux);
-    if (sampled) {
+    kd_raycount rc;
+    memset(&rc, 0, sizeof rc);
+    kd_raycount_cursor root_only; /* the shared context's cursor: the root cell only */
+    kd_raycount_cursor_init(&root_only, &rc);
+    if (counted) {
+        st = kd_raycount_init(&rc, &t->box, seg, nseg, err);
+        free(seg);
+        if (st != BSP_OK)
+            return st;
+        if (rc.nseg > 0) {
+            floor_share = MIXED_FLUX_FLOOR;
+            m.w_count = (1.0 - share) * (1.0 - floor_share) / (double)rc.nseg;
+            m.count = &root_only;
+        }
+    } else if (sampled) {
         st = kd_flux_build(&flux, &t->box, seg, nseg, MIXED_FLUX_CELLS, err);
         free(seg);
         if (st != BSP_OK)
@@ -548,7 +588,9 @@ bsp_status kd_build_view(kd_tree *t, const bsp_scene *scene, const bsp_build_opt
         }
     }
     m.w_surf = root_sa > 0.0 ? (1.0 - share) * floor_share / root_sa : 0.0;
-    st = kd_build_sah_measure(t, scene, o, kd_mixed_area, &m, err);
+    st = kd_build_sah_measure(t, scene, o, kd_mixed_area, &m,
+                              m.w_count > 0.0 ? &mixed_counted_descent : NULL, err);
     kd_flux_free(&flux);
+    kd_raycount_free(&rc);
     return st;
 }

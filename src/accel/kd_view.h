@@ -20,6 +20,7 @@
 
 #include "accel/kd_cost.h"
 #include "accel/kd_flux.h"
+#include "accel/kd_raycount.h"
 #include "accel/kd_tree.h"
 
 /* A resolved view: an orthonormal frame and the viewport. */
@@ -51,13 +52,17 @@ HIDDEN double kd_view_area(const bsp_box *box, const void *view);
  * for uniformly distributed lines, P_other = SA(B) / SA(root); the sampled
  * model by the density of the pre-pass's rays (kd_flux.h), with a floor of
  * uniform lines where the sample is thin: P_other = (1 - b) F(B) / F(root)
- * + b SA(B) / SA(root). */
+ * + b SA(B) / SA(root); the counted model the same with F the number of
+ * the pre-pass's segments that meet B (kd_raycount.h). */
 typedef struct kd_mixed_measure {
     kd_view view;
     double w_view;        /* w / A_viewport */
     double w_surf;        /* (1 - w) / SA(root), or (1 - w) b / SA(root) */
     double w_flux;        /* (1 - w) (1 - b) / F(root); 0: no sampled term */
     const kd_flux *flux;  /* the sampled term's density, when w_flux > 0 */
+    double w_count;       /* the counted model: (1 - w) (1 - b) / count(root); 0: none */
+    const kd_raycount_cursor *count; /* the counted term's cells, when w_count > 0 (each
+                                        build thread has a copy with its own cursor) */
 } kd_mixed_measure;
 
 /* The mixed measure of BOX; CTX is a kd_mixed_measure. */
