@@ -12,6 +12,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "accel/kd_raycount.h"
 #include "accel/kd_view.h"
 #include "geom/vec.h"
 #include "bspray/bspray.h"
@@ -511,20 +512,49 @@ TEST(pruned_view_sweep_picks_the_full_sweeps_plane)
     static double cost[MAXN];
     int mismatches = 0, found = 0, nodes = 0;
     char first[300] = "";
-    for (int it = 0; it < 1500; it++) {
-        int kind = it % 3;
+    for (int it = 0; it < 2000; it++) {
+        int kind = it % 4; /* PER, PAR, mixed (surface model), mixed (counted model) */
         kd_mixed_measure mm;
         memset(&mm, 0, sizeof mm); /* the surface model: no sampled term */
         mm.view = random_view(&rng, kind == 1);
         mm.w_view = rng_in(&rng, 0.05, 1.0) / (4.0 * mm.view.hx * mm.view.hy);
         mm.w_surf = rng_in(&rng, 0.0, 1.0) / 100.0;
         bsp_box cell = random_cell(&rng, &mm.view);
+        kd_raycount rc;
+        kd_raycount_cursor cur;
+        memset(&rc, 0, sizeof rc);
+        kd_raycount_cursor_init(&cur, &rc);
+        if (kind == 3) { /* segments around and through the cell, entered there */
+            enum { NSEG = 300 };
+            kd_flux_segment sg[NSEG];
+            bsp_box around = cell;
+            for (unsigned k = 0; k < 3; k++) {
+                double w = cell.hi.v[k] - cell.lo.v[k];
+                around.lo.v[k] -= w;
+                around.hi.v[k] += w;
+            }
+            for (int i = 0; i < NSEG; i++) {
+                bsp_vec3 o, d;
+                for (unsigned k = 0; k < 3; k++) {
+                    o.v[k] = rng_in(&rng, around.lo.v[k], around.hi.v[k]);
+                    d.v[k] = rng_in(&rng, -1.0, 1.0) * (around.hi.v[k] - around.lo.v[k]);
+                }
+                if (i % 4 == 0)
+                    d.v[i % 3] = 0.0;
+                sg[i] = (kd_flux_segment){o, d, 0.0, rng_in(&rng, 0.1, 2.0)};
+            }
+            bsp_error err;
+            REQUIRE(kd_raycount_init(&rc, &around, sg, NSEG, &err) == BSP_OK);
+            REQUIRE(kd_raycount_enter(&cur, &cell));
+            mm.count = &cur;
+            mm.w_count = rng_in(&rng, 0.1, 1.0) / (double)(rc.nseg ? rc.nseg : 1);
+        }
         size_t n = 1 + (size_t)(rng_unit(&rng) * (rng_unit(&rng) < 0.3 ? MAXN : 40));
         double grid = rng_unit(&rng) < 0.3 ? 0.05 : 0.0; /* shared positions */
         sah_build b;
         memset(&b, 0, sizeof b);
-        b.area = kind == 2 ? kd_mixed_area : kd_view_area;
-        b.actx = kind == 2 ? (const void *)&mm : (const void *)&mm.view;
+        b.area = kind >= 2 ? kd_mixed_area : kd_view_area;
+        b.actx = kind >= 2 ? (const void *)&mm : (const void *)&mm.view;
         b.ctrav = 1.0;
         b.bonus_mul = rng_unit(&rng) < 0.5 ? 0.9 : 1.0;
         b.mailbox = rng_unit(&rng) < 0.7;
@@ -549,8 +579,11 @@ TEST(pruned_view_sweep_picks_the_full_sweeps_plane)
             }
         }
         double area = b.area(&cell, b.actx);
-        if (!(area > 0.0))
+        if (!(area > 0.0)) {
+            kd_raycount_cursor_free(&cur);
+            kd_raycount_free(&rc);
             continue;
+        }
         nodes++;
         split_choice pruned = {INFINITY, 0, 0.0f, 0}, full = {INFINITY, 0, 0.0f, 0};
         for (unsigned k = 0; k < 3; k++) {
@@ -569,6 +602,8 @@ TEST(pruned_view_sweep_picks_the_full_sweeps_plane)
                      it, kind, n, pruned.axis, (double)pruned.pos, pruned.cost, full.axis,
                      (double)full.pos, full.cost);
         free(b.mruns);
+        kd_raycount_cursor_free(&cur);
+        kd_raycount_free(&rc);
     }
     CHECK_MSG(mismatches == 0, "%d of %d nodes differ; first: %s", mismatches, nodes, first);
     CHECK(nodes > 1000 && found > nodes / 2);

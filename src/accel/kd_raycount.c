@@ -21,10 +21,70 @@ static int clip_part(const double od[6], const bsp_box *b, double *ta, double *t
     return 1;
 }
 
-static int cmp_double(const void *x, const void *y)
+/* Doubles as unsigned keys of the same order (finite values; -0 sorts
+ * just below +0, which compare equal: no count changes). */
+static uint64_t double_key(double x)
 {
-    double a = *(const double *)x, b = *(const double *)y;
-    return (a > b) - (a < b);
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return (u >> 63) ? ~u : u | ((uint64_t)1 << 63);
+}
+
+static double key_double(uint64_t k)
+{
+    uint64_t u = (k >> 63) ? k & ~((uint64_t)1 << 63) : ~k;
+    double x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
+#define RADIX_MIN 64 /* fewer values: insertion sort */
+
+/* Sorts V[0..N) ascending; TMP has room for N keys. An LSD radix sort by
+ * bytes of the keys, skipping the bytes all keys share (coordinates of one
+ * cell share their upper bytes): glibc's qsort with a comparison callback
+ * took 79 % of the counted build of gears. */
+static void sort_doubles(double *v, size_t n, uint64_t *tmp)
+{
+    if (n < RADIX_MIN) {
+        for (size_t i = 1; i < n; i++) {
+            double x = v[i];
+            size_t j = i;
+            for (; j > 0 && v[j - 1] > x; j--)
+                v[j] = v[j - 1];
+            v[j] = x;
+        }
+        return;
+    }
+    size_t hist[8][256];
+    memset(hist, 0, sizeof hist);
+    uint64_t *a = (uint64_t *)(void *)v, *b = tmp;
+    for (size_t i = 0; i < n; i++) {
+        uint64_t k = double_key(v[i]);
+        a[i] = k;
+        for (int d = 0; d < 8; d++)
+            hist[d][(k >> (8 * d)) & 255]++;
+    }
+    for (int d = 0; d < 8; d++) {
+        size_t *h = hist[d];
+        if (h[(a[0] >> (8 * d)) & 255] == n)
+            continue; /* every key has this byte */
+        size_t sum = 0;
+        for (int j = 0; j < 256; j++) {
+            size_t c = h[j];
+            h[j] = sum;
+            sum += c;
+        }
+        for (size_t i = 0; i < n; i++)
+            b[h[(a[i] >> (8 * d)) & 255]++] = a[i];
+        uint64_t *x = a;
+        a = b;
+        b = x;
+    }
+    if (a != (uint64_t *)(void *)v)
+        memcpy(v, a, n * sizeof *a);
+    for (size_t i = 0; i < n; i++)
+        v[i] = key_double(((uint64_t *)(void *)v)[i]);
 }
 
 /* Grows C to hold N parts; 0 when out of memory. The arrays share one block. */
@@ -33,8 +93,9 @@ static int cell_reserve(kd_raycount_cell *c, size_t n)
     if (n <= c->cap)
         return 1;
     size_t cap = c->cap * 2 > n ? c->cap * 2 : n;
-    /* doubles first, then the indices: every array stays aligned */
-    char *blk = malloc(cap * (8 * sizeof(double) + sizeof(uint32_t)));
+    /* doubles first (and the sort's scratch), then the indices: every array
+     * stays aligned */
+    char *blk = malloc(cap * (9 * sizeof(double) + sizeof(uint32_t)));
     if (!blk)
         return 0;
     free(c->ta); /* the block's start */
@@ -45,7 +106,8 @@ static int cell_reserve(kd_raycount_cell *c, size_t n)
         c->lo[k] = d + (2 + 2 * k) * cap;
         c->hi[k] = d + (3 + 2 * k) * cap;
     }
-    c->seg = (uint32_t *)(void *)(d + 8 * cap);
+    c->sort_tmp = (uint64_t *)(void *)(d + 8 * cap);
+    c->seg = (uint32_t *)(void *)(d + 9 * cap);
     c->cap = cap;
     return 1;
 }
@@ -70,8 +132,8 @@ static void cell_sort_extremes(const kd_raycount *rc, kd_raycount_cell *c)
         }
     }
     for (int k = 0; k < 3; k++) {
-        qsort(c->lo[k], c->n, sizeof(double), cmp_double);
-        qsort(c->hi[k], c->n, sizeof(double), cmp_double);
+        sort_doubles(c->lo[k], c->n, c->sort_tmp);
+        sort_doubles(c->hi[k], c->n, c->sort_tmp);
     }
 }
 

@@ -39,6 +39,7 @@ typedef struct kd_raycount_cell {
     uint32_t *seg;         /* segment index per part */
     double *ta, *tb;       /* the part: seg's points at t in [ta, tb] */
     double *lo[3], *hi[3]; /* per axis, sorted: the least / greatest coordinate of each part */
+    uint64_t *sort_tmp;    /* scratch of the sort */
 } kd_raycount_cell;
 
 /* The sample: segments (origin, direction) and the root cell's parts. */

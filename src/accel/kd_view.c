@@ -504,11 +504,16 @@ double kd_view_measure_noise(kd_area_fn measure, const void *ctx, const bsp_box 
         return view_noise(ctx, cell, axis, zone);
     if (measure == kd_mixed_area) {
         const kd_mixed_measure *m = ctx;
-        if (m->w_flux > 0.0 || m->w_count > 0.0)
-            return INFINITY; /* the sampled term is not monotone (kd_flux.h); the
-                                counted one is, but no bound is derived for it yet */
+        if (m->w_flux > 0.0)
+            return INFINITY; /* the sampled term is not monotone (kd_flux.h) */
         double dv = view_noise(&m->view, cell, axis, zone);
-        return m->w_view * dv + m->w_surf * NOISE_K * DBL_EPSILON * kd_surface_area(cell);
+        double noise = m->w_view * dv + m->w_surf * NOISE_K * DBL_EPSILON * kd_surface_area(cell);
+        /* the counted term: integer counts, exactly monotone and covering
+         * (kd_raycount.h), scaled by one rounded product: CTX is the build
+         * thread's context, whose cursor has entered CELL */
+        if (m->w_count > 0.0)
+            noise += m->w_count * NOISE_K * DBL_EPSILON * kd_raycount_measure(m->count, cell);
+        return noise;
     }
     return INFINITY;
 }
