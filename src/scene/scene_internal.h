@@ -147,13 +147,15 @@ scene_isect(const bsp_scene *s, uint32_t prim, const isect_ray *ray, double tmax
             scene_isect_hit *h)
 {
     const prim_record *p = &s->prims[prim];
+    /* triangles first: the switch's compare tree costs them 2-3 more
+     * instructions per test (tetra, teapot and nurbtst are all triangles) */
+    if (__builtin_expect(p->shape == SHAPE_TRIANGLE, 1))
+        return triangle_isect(&s->triangles[p->slot], ray, tmax, &h->t, &h->bu, &h->bv, &h->det);
     switch ((shape_kind)p->shape) {
     case SHAPE_SPHERE:
         if (!sphere_isect(&s->spheres[p->slot], ray, tmax, &h->t))
             return 0;
         break;
-    case SHAPE_TRIANGLE:
-        return triangle_isect(&s->triangles[p->slot], ray, tmax, &h->t, &h->bu, &h->bv, &h->det);
     case SHAPE_POLYGON:
         if (!polygon_isect(&s->polygons[p->slot], s->verts, ray, tmax, &h->t))
             return 0;
