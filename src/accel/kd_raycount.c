@@ -42,8 +42,8 @@ static double key_double(uint64_t k)
 
 /* Sorts V[0..N) ascending; TMP has room for N keys. An LSD radix sort by
  * bytes of the keys, skipping the bytes all keys share (coordinates of one
- * cell share their upper bytes): glibc's qsort with a comparison callback
- * took 79 % of the counted build of gears. */
+ * cell share their upper bytes). On gears' counted build glibc's qsort with
+ * a comparison callback took 1.23 G of 9.75 G instructions, this 0.94 G. */
 static void sort_doubles(double *v, size_t n, uint64_t *tmp)
 {
     if (n < RADIX_MIN) {
