@@ -49,7 +49,12 @@ const char **bench_scene_array(int argc, const char *const *defaults)
     size_t n = 0;
     while (defaults[n])
         n++;
-    return calloc((size_t)argc + n + 1, sizeof(const char *));
+    const char **a = calloc((size_t)argc + n + 1, sizeof(const char *));
+    if (!a) {
+        fprintf(stderr, "%s: out of memory\n", prog);
+        exit(EXIT_INPUT);
+    }
+    return a;
 }
 
 int bench_scenes_or_defaults(const char **scenes, int n, const char *const *defaults)
@@ -484,10 +489,6 @@ int cmd_bench(int argc, char **argv)
     const char *csv_path = NULL;
     const char **scenes = bench_scene_array(argc, bench_default_scenes);
     int nscenes = 0;
-    if (!scenes) {
-        fprintf(stderr, "%s: out of memory\n", prog);
-        return EXIT_INPUT;
-    }
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {

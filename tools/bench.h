@@ -24,7 +24,8 @@ double bench_cpu_seconds(void);
 extern const char *const bench_default_scenes[];
 
 /* Room for the scenes of a command line of ARGC words, or for DEFAULTS
- * (NULL-terminated), whichever is more; NULL when out of memory (free()). */
+ * (NULL-terminated), whichever is more (free()); exits with a message when
+ * out of memory, as load_scene does. */
 const char **bench_scene_array(int argc, const char *const *defaults);
 /* N scenes were given in SCENES: when none, copies DEFAULTS there. Returns
  * the count. */

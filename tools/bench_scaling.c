@@ -301,10 +301,6 @@ int bench_scaling(int argc, char **argv)
     o.threads = ncpu > 0 ? (int)ncpu : 1;
     const char *csv_path = NULL;
     const char **scenes = bench_scene_array(argc, bench_scaling_default_scenes);
-    if (!scenes) {
-        fprintf(stderr, "%s: out of memory\n", prog);
-        return EXIT_INPUT;
-    }
     int nscenes = 0;
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];

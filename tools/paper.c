@@ -502,10 +502,6 @@ int bench_paper(int argc, char **argv)
     memcpy(o.rules, default_rules, sizeof default_rules);
     const char *csv_path = NULL;
     const char **scenes = bench_scene_array(argc, bench_default_scenes);
-    if (!scenes) {
-        fprintf(stderr, "%s: out of memory\n", prog);
-        return EXIT_INPUT;
-    }
     int nscenes = 0;
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
