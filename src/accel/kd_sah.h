@@ -100,14 +100,17 @@ enum { COST_UNIFORM, COST_CLASS, COST_ARRAY };
 #define EV_CLASS_SHIFT 28
 
 /* Subtrees deferred by the main build to be built in parallel
- * (kd_sah_tasks.c). */
+ * (kd_sah_tasks.c): worker threads build them while the main build goes on. */
 typedef struct sah_task sah_task;
+typedef struct sah_pool sah_pool;
 typedef struct sah_tasks {
-    sah_task *v;
+    sah_task **v;        /* in the order deferred; each task apart, so that growing
+                            v moves no task a worker is building */
     size_t n, cap;
     size_t min_n, max_n; /* a node of min_n..max_n primitives with no speculative
                             ancestor becomes a task (independent of the thread count,
                             so every thread count builds the same array) */
+    sah_pool *pool;      /* the workers (NULL: the tasks wait for kd_sah_finish_tasks) */
 } sah_tasks;
 
 typedef struct sah_build {
@@ -212,11 +215,15 @@ static inline int kd_sah_task_wanted(const sah_build *b, size_t n, int bad)
 HIDDEN bsp_status kd_sah_defer(sah_build *b, uint32_t node, const bsp_box *cell,
                                const node_lists *L, int depth, int surface);
 
-/* Builds the deferred subtrees on THREADS threads (each with scratch of its
- * own; B's scratch is freed first) and splices them into b->t in task order;
- * frees the tasks. THREADS
- * <= 0: only frees them. */
-HIDDEN bsp_status kd_sah_run_tasks(sah_build *b, int threads);
+/* Starts THREADS - 1 worker threads (THREADS <= 1: none) that build the
+ * tasks b->tasks defers from now on, as they come; call it when B is set up
+ * and before the main build starts: each worker copies B's shared state. */
+HIDDEN void kd_sah_start_workers(sah_build *b, int threads);
+
+/* After the main build (status ST): the calling thread frees B's scratch and
+ * builds the tasks left, with the workers (ST != BSP_OK: none is built),
+ * then splices the subtrees into b->t in task order and frees the tasks. */
+HIDDEN bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st);
 
 /* The build threads options O ask for (0: every online core). */
 HIDDEN int kd_build_threads(const bsp_build_options *o);

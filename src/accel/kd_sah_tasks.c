@@ -5,15 +5,22 @@
  * defers every node of a middle size (sah_tasks.min_n..max_n primitives)
  * whose ancestors are all "good" splits: such a subtree's cost is never
  * needed by an ancestor (only a speculative "bad refine" retracts its
- * subtree by cost), so it can be built later and apart. Each task gets a
- * copy of its node's three event lists and builds into a kd_tree of its own;
- * worker threads take tasks in order, each with scratch of its own (the
- * per-primitive bounds, costs and classes are shared read-only). The
- * subtrees are then appended to the main array in task order, their child
- * and leaf indices rebased. Which nodes become tasks depends only on the
- * scene, so every thread count builds the very same node array: within a
- * task, and in the top part, nodes are in depth-first order; children stay
- * adjacent everywhere.
+ * subtree by cost), so it can be built apart. Each task gets a copy of its
+ * node's three event lists and builds into a kd_tree of its own. Worker
+ * threads, started before the main build, take the tasks in order as they
+ * are deferred, each with scratch of its own (the per-primitive bounds,
+ * costs and classes are shared read-only); when the main build is done, its
+ * thread joins them. The subtrees are then appended to the main array in
+ * task order, their child and leaf indices rebased. Which nodes become tasks
+ * depends only on the scene, so every thread count builds the very same node
+ * array: within a task, and in the top part, nodes are in depth-first order;
+ * children stay adjacent everywhere.
+ *
+ * Shared between the threads, under the pool's lock: the task list (count,
+ * the array of task pointers, which the main build grows) and the pool's
+ * cursor and flags. A task itself belongs to the main build until it is
+ * listed, then to the one worker that takes it, then, after the join, to the
+ * main thread again.
  */
 #include <pthread.h>
 #include <unistd.h>
@@ -40,25 +47,65 @@ int kd_build_threads(const bsp_build_options *o)
     return n > 0 ? (int)(n < 256 ? n : 256) : 1;
 }
 
+struct sah_pool {
+    pthread_mutex_t lock;
+    pthread_cond_t more; /* a task was listed, or the pool closed */
+    sah_tasks *tasks;
+    size_t next;         /* the next task to take */
+    int closed;          /* the main build is over: no task will be listed */
+    int abort;           /* ... and it failed: build no more tasks */
+    int started;         /* worker threads running */
+    pthread_t tid[255];
+    kd_tree limits;      /* the main tree's limits (no nodes), for the subtrees */
+    sah_build proto;     /* the shared part of the main build's state */
+};
+
+static bsp_status task_oom(bsp_error *err)
+{
+    return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
+}
+
+/* Lists TK as task number ts->n (under the pool's lock when there is one).
+ * 0 when out of memory. */
+static int list_task(sah_tasks *ts, sah_task *tk)
+{
+    sah_pool *pool = ts->pool;
+    int ok = 1;
+    if (pool)
+        pthread_mutex_lock(&pool->lock);
+    if (ts->n == ts->cap) {
+        size_t ncap = ts->cap ? 2 * ts->cap : 64;
+        sah_task **nv = realloc(ts->v, ncap * sizeof *nv);
+        if (nv) {
+            ts->v = nv;
+            ts->cap = ncap;
+        } else {
+            ok = 0;
+        }
+    }
+    if (ok)
+        ts->v[ts->n++] = tk;
+    if (pool) {
+        pthread_cond_signal(&pool->more);
+        pthread_mutex_unlock(&pool->lock);
+    }
+    return ok;
+}
+
 bsp_status kd_sah_defer(sah_build *b, uint32_t node, const bsp_box *cell, const node_lists *L,
                         int depth, int surface)
 {
     sah_tasks *ts = b->tasks;
-    if (ts->n == ts->cap) {
-        size_t ncap = ts->cap ? 2 * ts->cap : 64;
-        sah_task *nv = realloc(ts->v, ncap * sizeof *nv);
-        if (!nv)
-            return error_set(b->err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
-        ts->v = nv;
-        ts->cap = ncap;
-    }
-    sah_task *tk = &ts->v[ts->n];
-    memset(tk, 0, sizeof *tk);
+    sah_task *tk = calloc(1, sizeof *tk);
+    if (!tk)
+        return task_oom(b->err);
     const size_t m = 2 * L->n;
     tk->cap = 3 * m; /* just its lists: the worker grows them (deferred tasks wait in memory) */
     tk->ev = malloc(tk->cap * sizeof *tk->ev);
-    if (!tk->ev)
-        return error_set(b->err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
+    if (!tk->ev) {
+        free(tk);
+        return task_oom(b->err);
+    }
     for (unsigned k = 0; k < 3; k++)
         memcpy(tk->ev + k * m, b->ev + L->base + k * L->stride, m * sizeof *tk->ev);
     tk->node = node;
@@ -68,11 +115,15 @@ bsp_status kd_sah_defer(sah_build *b, uint32_t node, const bsp_box *cell, const 
     tk->depth = depth;
     tk->surface = surface;
     /* until a worker runs it */
-    tk->st = error_set(&tk->err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
-    ts->n++;
+    tk->st = task_oom(&tk->err);
     /* an empty leaf until spliced */
     b->t->nodes[node].u.first = 0;
     b->t->nodes[node].bits = KD_LEAF_TAG;
+    if (!list_task(ts, tk)) {
+        free(tk->ev);
+        free(tk);
+        return task_oom(b->err);
+    }
     return BSP_OK;
 }
 
@@ -112,34 +163,97 @@ static void run_task(sah_build *w, sah_task *tk)
     w->t = (kd_tree *)main_t;
 }
 
-typedef struct task_pool {
-    const sah_build *main;
-    sah_tasks *tasks;
-    size_t next; /* the next task to take, under lock */
-    pthread_mutex_t lock;
-} task_pool;
-
+/* Builds tasks from POOL until it is closed and none is left (or it is
+ * aborted), with scratch of its own. */
 static void *worker(void *arg)
 {
-    task_pool *pool = arg;
-    /* the main build's state with no scratch (kd_sah_run_tasks freed it):
-     * each worker grows its own; the per-primitive inputs stay shared */
-    sah_build w = *pool->main;
+    sah_pool *pool = arg;
+    sah_tasks *ts = pool->tasks;
+    sah_build w = pool->proto;
     w.cls = calloc((size_t)w.spare + 1, 1);
     if (w.descent) /* a measure context of its own */
         w.actx = w.dctx = w.descent->thread_ctx(w.shared_actx);
-    while (w.cls && (!w.descent || w.dctx)) { /* without it, the other workers take the tasks */
+    int ready = w.cls && (!w.descent || w.dctx); /* if not, the other threads take the tasks */
+    while (ready) {
+        sah_task *tk = NULL;
         pthread_mutex_lock(&pool->lock);
-        size_t i = pool->next++;
+        while (pool->next >= ts->n && !pool->closed)
+            pthread_cond_wait(&pool->more, &pool->lock);
+        if (!pool->abort && pool->next < ts->n)
+            tk = ts->v[pool->next++];
         pthread_mutex_unlock(&pool->lock);
-        if (i >= pool->tasks->n)
+        if (!tk)
             break;
-        run_task(&w, &pool->tasks->v[i]);
+        run_task(&w, tk);
     }
     kd_sah_scratch_free(&w);
     if (w.descent && w.dctx)
         w.descent->free_ctx(w.dctx);
     return NULL;
+}
+
+/* A pool for the tasks TS of B, with no thread yet; NULL when out of
+ * memory. Its copy of B's state shares the per-primitive inputs and none of
+ * B's scratch. */
+static sah_pool *pool_create(const sah_build *b, sah_tasks *ts)
+{
+    sah_pool *pool = calloc(1, sizeof *pool);
+    if (!pool)
+        return NULL;
+    if (pthread_mutex_init(&pool->lock, NULL) != 0) {
+        free(pool);
+        return NULL;
+    }
+    if (pthread_cond_init(&pool->more, NULL) != 0) {
+        pthread_mutex_destroy(&pool->lock);
+        free(pool);
+        return NULL;
+    }
+    pool->tasks = ts;
+    pool->limits.max_depth = b->t->max_depth;
+    pool->limits.max_leaf_prims = b->t->max_leaf_prims;
+    pool->limits.pad = b->t->pad;
+    sah_build *w = &pool->proto;
+    *w = *b;
+    w->t = &pool->limits;
+    w->err = NULL;
+    w->tasks = NULL; /* a task defers nothing */
+    w->actx = w->descent ? NULL : b->actx;
+    w->dctx = NULL;
+    w->cls = NULL;
+    w->ev = NULL;
+    w->cap = 0;
+    w->nev[0] = w->nev[1] = NULL;
+    w->nev_cap = 0;
+    w->list = NULL;
+    w->list_cap = 0;
+    memset(&w->clip, 0, sizeof w->clip);
+    w->chunks = NULL;
+    w->chunks_cap = 0;
+    w->mruns = NULL;
+    w->mruns_cap = 0;
+    return pool;
+}
+
+static void pool_destroy(sah_pool *pool)
+{
+    pthread_cond_destroy(&pool->more);
+    pthread_mutex_destroy(&pool->lock);
+    free(pool);
+}
+
+void kd_sah_start_workers(sah_build *b, int threads)
+{
+    if (threads <= 1 || !b->tasks)
+        return;
+    sah_pool *pool = pool_create(b, b->tasks);
+    if (!pool)
+        return; /* the tasks wait for kd_sah_finish_tasks */
+    b->tasks->pool = pool;
+    int want = threads - 1 < 255 ? threads - 1 : 255;
+    for (; pool->started < want; pool->started++)
+        if (pthread_create(&pool->tid[pool->started], NULL, worker, pool) != 0)
+            break; /* fewer threads: the others take the tasks */
 }
 
 /* Appends task TK's subtree to T: node j >= 1 goes to base + j - 1, the root
@@ -180,38 +294,42 @@ static int splice(kd_tree *t, const sah_task *tk)
     return 1;
 }
 
-bsp_status kd_sah_run_tasks(sah_build *b, int threads)
+bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
 {
     sah_tasks *ts = b->tasks;
-    bsp_status st = BSP_OK;
     b->tasks = NULL;
-    kd_sah_scratch_free(b); /* the workers copy B: with no scratch to share */
-    if (threads > 0 && ts->n > 0) {
-        task_pool pool = {b, ts, 0, PTHREAD_MUTEX_INITIALIZER};
-        if ((size_t)threads > ts->n)
-            threads = (int)ts->n;
-        pthread_t tid[256];
-        int started = 0;
-        for (; started < threads - 1; started++)
-            if (pthread_create(&tid[started], NULL, worker, &pool) != 0)
-                break; /* fewer threads: the others take the tasks */
-        worker(&pool);
-        for (int i = 0; i < started; i++)
-            pthread_join(tid[i], NULL);
-        for (size_t i = 0; i < ts->n && st == BSP_OK; i++) {
-            if (ts->v[i].st != BSP_OK) { /* failed, or no worker could run it */
-                if (b->err)
-                    *b->err = ts->v[i].err;
-                st = ts->v[i].st;
-            } else if (!splice(b->t, &ts->v[i])) {
-                st = error_set(b->err, BSP_ERR_NOMEM, NULL, 0,
-                               "out of memory while building the kd-tree");
-            }
+    if (!ts)
+        return st;
+    kd_sah_scratch_free(b); /* the main thread builds tasks now, with scratch of its own */
+    sah_pool *pool = ts->pool;
+    if (!pool && ts->n > 0 && st == BSP_OK && !(pool = pool_create(b, ts)))
+        st = task_oom(b->err);
+    if (pool) {
+        pthread_mutex_lock(&pool->lock);
+        pool->closed = 1;
+        pool->abort = st != BSP_OK;
+        pthread_cond_broadcast(&pool->more);
+        pthread_mutex_unlock(&pool->lock);
+        if (st == BSP_OK)
+            worker(pool);
+        for (int i = 0; i < pool->started; i++)
+            pthread_join(pool->tid[i], NULL);
+        pool_destroy(pool);
+    }
+    for (size_t i = 0; i < ts->n && st == BSP_OK; i++) {
+        const sah_task *tk = ts->v[i];
+        if (tk->st != BSP_OK) { /* failed, or no thread could run it */
+            if (b->err)
+                *b->err = tk->err;
+            st = tk->st;
+        } else if (!splice(b->t, tk)) {
+            st = task_oom(b->err);
         }
     }
     for (size_t i = 0; i < ts->n; i++) {
-        free(ts->v[i].ev);
-        kd_tree_free(&ts->v[i].sub);
+        free(ts->v[i]->ev);
+        kd_tree_free(&ts->v[i]->sub);
+        free(ts->v[i]);
     }
     free(ts->v);
     memset(ts, 0, sizeof *ts);
