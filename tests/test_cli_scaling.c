@@ -125,4 +125,23 @@ TEST(cli_bench_scaling_help_and_bad_arguments)
         CHECK_STR_CONTAINS(out, bad[i].message);
         free(out);
     }
+
+    /* a malformed file after a good scene: named with its line before any build,
+     * so no table is printed */
+    char nff[512];
+    snprintf(nff, sizeof nff, "%s/scaling_bad.nff", harness_tmpdir());
+    FILE *f = fopen(nff, "w");
+    REQUIRE(f);
+    fputs("v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution 8 8\n"
+          "s 0 0 0 abc\n",
+          f);
+    fclose(f);
+    snprintf(cmd, sizeof cmd, "%s bench --scaling spd:balls:2 %s --quiet 2>&1", harness_cli(),
+             nff);
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 1);
+    CHECK_STR_CONTAINS(out, "scaling_bad.nff:8: malformed number 'abc'");
+    CHECK_MSG(strstr(out, "| spd:balls:2 |") == NULL, "a scene was measured first:\n%s", out);
+    free(out);
 }

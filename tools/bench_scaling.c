@@ -254,8 +254,11 @@ static void print_summary(const scaling_row *rows, int nrows)
 }
 
 /* Before a run of minutes: is SCENE an SPD scene of a known name and size
- * factor, or a readable file? 1, or 0 with a message. The loader checks the
- * rest (a ":tN" suffix, the file's contents) when the scene's turn comes. */
+ * factor, or a file that loads? 1, or 0 with a message. A file is loaded
+ * and freed again (the run loads one scene at a time, to keep the memory of
+ * one), so that a malformed file is reported before the first build, not
+ * after the scenes before it; the loader checks an SPD scene's ":tN" suffix
+ * when its turn comes. */
 static int scene_looks_loadable(const char *scene)
 {
     if (strncmp(scene, "spd:", 4) == 0) {
@@ -281,12 +284,13 @@ static int scene_looks_loadable(const char *scene)
         }
         return 1;
     }
-    FILE *f = fopen(scene, "rb");
-    if (!f) {
-        fprintf(stderr, "%s: %s: cannot open: %s\n", prog, scene, strerror(errno));
+    bsp_scene *s = NULL;
+    bsp_error err;
+    if (bsp_scene_load(scene, &s, &err) != BSP_OK) {
+        fprintf(stderr, "%s: %s\n", prog, err.message);
         return 0;
     }
-    fclose(f);
+    bsp_scene_destroy(s);
     return 1;
 }
 
