@@ -215,10 +215,11 @@ static inline int kd_sah_task_wanted(const sah_build *b, size_t n, int bad)
 HIDDEN bsp_status kd_sah_defer(sah_build *b, uint32_t node, const bsp_box *cell,
                                const node_lists *L, int depth, int surface);
 
-/* Starts THREADS - 1 worker threads (THREADS <= 1: none) that build the
- * tasks b->tasks defers from now on, as they come; call it when B is set up
- * and before the main build starts: each worker copies B's shared state. */
-HIDDEN void kd_sah_start_workers(sah_build *b, int threads);
+/* Starts THREADS - 1 worker threads (THREADS <= 1: none; no more than a
+ * build of N primitives can have tasks for) that build the tasks b->tasks
+ * defers from now on, as they come; call it when B is set up and before the
+ * main build starts: each worker copies B's shared state. */
+HIDDEN void kd_sah_start_workers(sah_build *b, int threads, size_t n);
 
 /* After the main build (status ST): the calling thread frees B's scratch and
  * builds the tasks left, with the workers (ST != BSP_OK: none is built),

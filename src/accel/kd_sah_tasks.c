@@ -242,16 +242,20 @@ static void pool_destroy(sah_pool *pool)
     free(pool);
 }
 
-void kd_sah_start_workers(sah_build *b, int threads)
+void kd_sah_start_workers(sah_build *b, int threads, size_t n)
 {
-    if (threads <= 1 || !b->tasks)
-        return;
+    /* a task has at least min_n primitives; straddlers can count twice */
+    size_t most = b->tasks && b->tasks->min_n ? 2 * n / b->tasks->min_n : 0;
+    if (threads <= 1 || most == 0)
+        return; /* the tasks, if any, wait for kd_sah_finish_tasks */
     sah_pool *pool = pool_create(b, b->tasks);
     if (!pool)
-        return; /* the tasks wait for kd_sah_finish_tasks */
+        return;
     b->tasks->pool = pool;
-    int want = threads - 1 < 255 ? threads - 1 : 255;
-    for (; pool->started < want; pool->started++)
+    size_t want = (size_t)threads - 1;
+    want = want < most ? want : most;
+    want = want < 255 ? want : 255;
+    for (; (size_t)pool->started < want; pool->started++)
         if (pthread_create(&pool->tid[pool->started], NULL, worker, pool) != 0)
             break; /* fewer threads: the others take the tasks */
 }

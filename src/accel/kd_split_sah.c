@@ -692,7 +692,7 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     tasks.max_n = n / 64 > 512 ? n / 64 : 512;
     tasks.min_n = tasks.max_n / 8;
     b.tasks = &tasks;
-    kd_sah_start_workers(&b, kd_build_threads(o));
+    kd_sah_start_workers(&b, kd_build_threads(o), n);
     st = kd_sah_build_node(&b, 0, t->box, root, 3 * m, 0, 0, b.surface, &cost);
     st = kd_sah_finish_tasks(&b, st);
 done:
