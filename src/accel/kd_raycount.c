@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "accel/kd_raycount.h"
+#include "util/insertion_sort.h"
 
 /* Clips the part [*TA, *TB] of the segment OD (origin, direction) to box
  * B; 0 when nothing is left. */
@@ -47,13 +48,7 @@ static double key_double(uint64_t k)
 static void sort_doubles(double *v, size_t n, uint64_t *tmp)
 {
     if (n < RADIX_MIN) {
-        for (size_t i = 1; i < n; i++) {
-            double x = v[i];
-            size_t j = i;
-            for (; j > 0 && v[j - 1] > x; j--)
-                v[j] = v[j - 1];
-            v[j] = x;
-        }
+        INSERTION_SORT(double, v, n);
         return;
     }
     size_t hist[8][256];

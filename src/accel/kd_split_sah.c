@@ -77,6 +77,7 @@
  * scratch array is grown amortized.
  */
 #include "accel/kd_sah.h"
+#include "util/insertion_sort.h"
 
 #define MAX_BAD_REFINES 1
 #define MIN_BAD_REFINE_PRIMS 8
@@ -127,13 +128,7 @@ static void sort_keys(uint64_t *a, size_t n)
         qsort(a, n, sizeof *a, cmp_u64);
         return;
     }
-    for (size_t i = 1; i < n; i++) {
-        uint64_t x = a[i];
-        size_t j = i;
-        for (; j > 0 && a[j - 1] > x; j--)
-            a[j] = a[j - 1];
-        a[j] = x;
-    }
+    INSERTION_SORT(uint64_t, a, n);
 }
 
 static int cmp_u32(const void *x, const void *y)
@@ -148,13 +143,7 @@ static void sort_u32(uint32_t *a, size_t n)
         qsort(a, n, sizeof *a, cmp_u32);
         return;
     }
-    for (size_t i = 1; i < n; i++) {
-        uint32_t x = a[i];
-        size_t j = i;
-        for (; j > 0 && a[j - 1] > x; j--)
-            a[j] = a[j - 1];
-        a[j] = x;
-    }
+    INSERTION_SORT(uint32_t, a, n);
 }
 
 static bsp_status oom(sah_build *b)
