@@ -198,7 +198,7 @@ static long stats_field(const char *out, const char *label)
     return p ? strtol(p + strlen(label), NULL, 10) : -1;
 }
 
-/* --costs and --empty-bonus reach the builder: the CLI's tree has the leaves
+/* --costs, --empty-bonus and --min-saving reach the builder: the CLI's tree has the leaves
  * and references of the tree the API builds with the same costs (an
  * independent build), which differ from the default tree's; bad lists are
  * usage errors (exit 2) that name the option. */
@@ -264,15 +264,37 @@ TEST(cli_costs_reach_the_builder)
     REQUIRE(field);
     CHECK(strtol(field, NULL, 10) == (long)want.leaves);
 
-    const char *bad[] = {"--costs sphere", "--costs sphere=0", "--costs bogus=1",
-                         "--costs sphere=1,", "--costs cone=inf", "--empty-bonus 1"};
+    /* --min-saving 0 (none) reaches it too: tetra's unlimited tree */
+    REQUIRE(bsp_scene_load("spd:tetra", &s, &err) == BSP_OK);
+    bsp_build_options_defaults(&o);
+    o.sah_min_saving = -1.0;
+    REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+    bsp_accel_tree_stats(a, &want);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+    snprintf(cmd, sizeof cmd, "%s stats spd:tetra --accel sah --min-saving 0", harness_cli());
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    CHECK(stats_field(out, "N_V") == (long)want.leaves);
+    free(out);
+    snprintf(cmd, sizeof cmd, "%s stats spd:tetra --accel sah", harness_cli());
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK(stats_field(out, "N_V") < (long)want.leaves); /* the default limit prunes */
+    free(out);
+
+    const char *bad[] = {"--costs sphere",    "--costs sphere=0",   "--costs bogus=1",
+                         "--costs sphere=1,", "--costs cone=inf",   "--empty-bonus 1",
+                         "--min-saving -1",   "--min-saving inf",   "--min-saving x"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         snprintf(cmd, sizeof cmd, "%s stats spd:lattice:2 --accel sah %s 2>&1", harness_cli(),
                  bad[i]);
         out = harness_run(cmd, &st);
         REQUIRE(out);
         CHECK_EQ_INT(st, 2);
-        CHECK(strstr(out, "--costs") || strstr(out, "--empty-bonus"));
+        CHECK(strstr(out, "--costs") || strstr(out, "--empty-bonus") ||
+              strstr(out, "--min-saving"));
         free(out);
     }
 }

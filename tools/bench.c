@@ -90,7 +90,8 @@ static void print_help(void)
            "  --validate N      random rays compared with naive before timing (default 20000)\n"
            "  --csv FILE        also write one CSV row per scene x method\n"
            "  --quiet           no progress lines on stderr\n"
-           "  --costs LIST, --empty-bonus F  the SAH cost model (see 'bspray render --help')\n"
+           "  --costs LIST, --empty-bonus F, --min-saving X  the SAH cost model (see\n"
+           "                 'bspray render --help')\n"
            "\n"
            "Columns: T_B build seconds on 1 and N threads (the same tree); MB structure size;\n"
            "N_V leaves; N_IT intersection tests and N_TS traversal steps per ray (all rays of\n"
@@ -292,7 +293,7 @@ typedef struct bench_opts {
     int res, depth, threads, mailbox, nvalidate, quiet;
     bsp_accel_kind kinds[BSP_ACCEL_KIND_COUNT];
     int nkinds, kinds_given;
-    cost_args costs; /* --costs, --empty-bonus */
+    cost_args costs; /* --costs, --empty-bonus, --min-saving */
     FILE *csv;
 } bench_opts;
 

@@ -27,6 +27,7 @@ void bsp_build_options_defaults(bsp_build_options *opts)
     opts->mailbox = 1;
     kd_cost_defaults(&opts->sah_costs);
     opts->sah_empty_bonus = KD_DEFAULT_EMPTY_BONUS;
+    opts->sah_min_saving = KD_DEFAULT_MIN_SAVING;
     opts->mixed_model = BSP_MIXED_COUNTED;
     opts->mixed_check = 1;
 }

@@ -74,6 +74,12 @@ void kd_cost_resolve(const bsp_build_options *o, kd_cost_model *m)
     else if (b > 0.99)
         b = 0.99;
     m->empty_bonus = b;
+    double ms = o->sah_min_saving;
+    if (ms == 0.0 || !isfinite(ms))
+        ms = KD_DEFAULT_MIN_SAVING;
+    else if (ms < 0.0)
+        ms = 0.0;
+    m->min_saving = ms;
     m->mailbox = o->mailbox != 0;
     m->mailbox_hit = KD_MAILBOX_HIT_COST * m->c.traversal;
 }

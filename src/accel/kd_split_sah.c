@@ -55,7 +55,13 @@
  * over 4x the leaf with < 16 primitives (pbrt) or the node has fewer than
  * MIN_BAD_REFINE_PRIMS primitives. A subtree under a bad refine whose actual
  * cost is not below its leaf cost is retracted into one leaf afterwards
- * (Mitsuba). The small-node limit: on 11 SPD scenes, bad refines of nodes
+ * (Mitsuba). And a leaf when the best split pays but saves less than
+ * min_saving mean tests per ray of the whole tree (its cell's surface area
+ * over the root's, times leaf cost minus split cost): around a vertex
+ * shared by several triangles every split of a cell "pays" a little, as the
+ * cell shrinks towards the vertex, so without this limit such chains run to
+ * the depth limit through cells only a few paddings wide (tetra: 60 % of
+ * its leaves; docs/kdtree.md). The small-node limit: on 11 SPD scenes, bad refines of nodes
  * of 2-7 primitives changed render instructions by -0.05 to +0.2 % (the
  * rest of their subtrees were retracted) and cost 14-26 % of the build's
  * instructions; on shells, whose nested spheres need them, they happen at
@@ -322,6 +328,12 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
         }
     }
     if (!best.found)
+        return make_leaf(b, node, b->ev + L.base, n);
+    /* a split that pays, but saves so little per ray of the whole tree that
+     * it is not worth a node (the uniform-line probability of the cell, by
+     * surface area, whatever the build's measure) */
+    if (best.cost < tsum && !b->to_limits &&
+        kd_surface_area(&cell) * b->inv_root_area * (tsum - best.cost) < b->min_saving)
         return make_leaf(b, node, b->ev + L.base, n);
     int bad_here = 0;
     if (best.cost >= tsum && !b->to_limits) {
@@ -673,6 +685,8 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
             tmin = tp < tmin ? tp : tmin;
         }
     b.linear = !b.mailbox || tmin >= b.mb_hit;
+    b.min_saving = n > 0 ? cm.min_saving * tsum / (double)n : 0.0;
+    b.inv_root_area = 1.0 / kd_surface_area(&t->box);
     node_lists root = {0, m, n, tsum};
     /* subtrees of n/64 (at least 512) primitives and down to an eighth of that
      * are built as tasks, on the threads asked for */

@@ -798,7 +798,7 @@ static bsp_status read_face(obj_parser *P, size_t kline)
 static bsp_status read_statement(obj_parser *P, const token *k)
 {
     double x[7];
-    size_t n;
+    size_t n = 0; /* set by read_values; initialised for gcc -O3's maybe-uninitialized */
     bsp_status st;
     char shown[MESH_SHOW_SIZE];
     const size_t kl = k->line;
