@@ -24,7 +24,7 @@ TEST(cli_bench_table_and_csv)
     char csv[512], cmd[2048];
     snprintf(csv, sizeof csv, "%s/bench.csv", harness_tmpdir());
     snprintf(cmd, sizeof cmd,
-             "%s bench spd:balls:1 spd:tetra:2 --res 17 --validate 300 --quiet --csv %s",
+             "%s bench spd:balls:1 spd:tetra:2 --res 17 --validate 300 --repeat 2 --quiet --csv %s",
              harness_cli(), csv);
     int st;
     char *out = harness_run(cmd, &st);
@@ -57,6 +57,12 @@ TEST(cli_bench_table_and_csv)
     REQUIRE(out);
     CHECK_EQ_INT(st, 2);
     CHECK_STR_CONTAINS(out, "unknown acceleration method 'octree'");
+    free(out);
+    snprintf(cmd, sizeof cmd, "%s bench spd:balls:1 --repeat 0 2>&1", harness_cli());
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 2);
+    CHECK_STR_CONTAINS(out, "'--repeat'");
     free(out);
 }
 

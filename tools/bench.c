@@ -7,15 +7,18 @@
  *   2. validate before timing: seeded random rays around the scene and the
  *      camera's primary rays are shot with the method and with the naive
  *      method; any difference (primitive, bit-identical t, occlusion) aborts;
- *   3. render once single-threaded (T_TR 1t) while recording every ray by
- *      class, and take the per-ray figures N_IT, N_TS, N_ETS, N_EETS;
- *   4. render again with all threads (T_TR Nt);
+ *   3. render once single-threaded while recording every ray by class, and
+ *      take the per-ray figures N_IT, N_TS, N_ETS, N_EETS;
+ *   4. time renders without the recording: T_TR 1t and T_TR Nt, each the
+ *      best of --repeat renders (default 3; one render is disturbed easily
+ *      on a shared machine), on one thread by its CPU time;
  *   5. shoot the recorded primary, shadow and secondary rays alone, with 1
  *      and with all threads, for the pure ray-shooting throughput of each
  *      class (closest hit for primary and secondary rays, any hit for shadow
  *      rays), in Mrays/s, the best of three passes.
- * Times are wall-clock seconds on a monotonic clock; single-thread figures
- * are the ones to compare across machines.
+ * Times on all threads are wall-clock seconds on a monotonic clock; times
+ * on one thread are its CPU time. Single-thread figures are the ones to
+ * compare across machines.
  */
 #include <errno.h>
 #include <inttypes.h>
@@ -31,7 +34,8 @@
 
 static const char bench_usage[] =
     "bspray bench [SCENE...] [--accel LIST] [--res N] [--depth N] [--threads N]\n"
-    "                        [--mailbox on|off] [--validate N] [--csv FILE] [--quiet]\n"
+    "                        [--mailbox on|off] [--validate N] [--repeat N] [--csv FILE]\n"
+    "                        [--quiet]\n"
     "       bspray bench --paper [SCENE...] [--accel LIST] [--csv FILE] ...  (see --paper --help)\n"
     "       bspray bench --scaling [SCENE...] [--accel LIST] [--repeat N] ...  (see --scaling --help)";
 
@@ -88,6 +92,7 @@ static void print_help(void)
            "  --threads N       the 'all threads' figures use N threads (default: all cores)\n"
            "  --mailbox on|off  mailboxes for kd-trees (default on)\n"
            "  --validate N      random rays compared with naive before timing (default 20000)\n"
+           "  --repeat N        timed renders per T_TR figure, the best counts (default 3)\n"
            "  --csv FILE        also write one CSV row per scene x method\n"
            "  --quiet           no progress lines on stderr\n"
            "  --costs LIST, --empty-bonus F, --min-saving X  the SAH cost model (see\n"
@@ -95,9 +100,10 @@ static void print_help(void)
            "\n"
            "Columns: T_B build seconds on 1 and N threads (the same tree); MB structure size;\n"
            "N_V leaves; N_IT intersection tests and N_TS traversal steps per ray (all rays of\n"
-           "the render); T_TR render seconds on 1 and N threads; Mrays/s of pure ray shooting\n"
-           "per class on 1 and N threads (the best of 3 passes over the recorded rays; on 1\n"
-           "thread by its CPU time, on N threads by the wall clock).\n",
+           "the render); T_TR render seconds on 1 and N threads (the best of --repeat renders);\n"
+           "Mrays/s of pure ray shooting per class on 1 and N threads (the best of 3 passes\n"
+           "over the recorded rays). On 1 thread times are its CPU time, on N threads the\n"
+           "wall clock.\n",
            bench_usage, NAIVE_DEFAULT_MAX_PRIMS);
 }
 
@@ -108,6 +114,14 @@ typedef struct ray_set {
     size_t n, cap;
     int failed;
 } ray_set;
+
+static void free_ray_sets(ray_set sets[BSP_RAY_CLASS_COUNT])
+{
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
+        free(sets[c].rays);
+        sets[c].rays = NULL;
+    }
+}
 
 static void log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
 {
@@ -291,6 +305,7 @@ long bench_validate(const bsp_accel *accel, const bsp_accel *naive, const bsp_sc
 
 typedef struct bench_opts {
     int res, depth, threads, mailbox, nvalidate, quiet;
+    int repeat; /* timed renders per figure; T_TR is the best */
     bsp_accel_kind kinds[BSP_ACCEL_KIND_COUNT];
     int nkinds, kinds_given;
     cost_args costs; /* --costs, --empty-bonus, --min-saving */
@@ -420,10 +435,10 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     if (bsp_render(accel, &ro, &img, &st, &err) != BSP_OK) {
         fprintf(stderr, "%s: %s: %s\n", prog, scene_name, err.message);
         bsp_accel_destroy(accel);
+        free_ray_sets(sets);
         return 1;
     }
     bsp_image_destroy(img);
-    row.t_tr1 = st.render_seconds;
     uint64_t all = 0, tests = 0, steps = 0, ets = 0, eets = 0;
     for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
         row.rays[c] = st.cls[c].rays;
@@ -439,11 +454,29 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
         row.n_ets = (double)ets / (double)all;
         row.n_eets = (double)eets / (double)all;
     }
+    /* the timed renders: no recording; one thread (the calling one) by its
+     * CPU time, time descheduled not being its own */
     ro.ray_log = NULL;
-    ro.threads = o->threads;
-    if (bsp_render(accel, &ro, &img, &st, &err) == BSP_OK) {
-        row.t_trn = st.render_seconds;
+    row.t_tr1 = row.t_trn = INFINITY;
+    for (int rep = 0; rep < o->repeat; rep++) {
+        ro.threads = 1;
+        double c0 = bench_cpu_seconds();
+        bsp_status rs = bsp_render(accel, &ro, &img, NULL, &err);
+        double dt = bench_cpu_seconds() - c0;
+        if (rs == BSP_OK) {
+            bsp_image_destroy(img);
+            ro.threads = o->threads;
+            rs = bsp_render(accel, &ro, &img, &st, &err);
+        }
+        if (rs != BSP_OK) {
+            fprintf(stderr, "%s: %s: %s\n", prog, scene_name, err.message);
+            bsp_accel_destroy(accel);
+            free_ray_sets(sets);
+            return 1;
+        }
         bsp_image_destroy(img);
+        row.t_tr1 = dt < row.t_tr1 ? dt : row.t_tr1;
+        row.t_trn = st.render_seconds < row.t_trn ? st.render_seconds : row.t_trn;
     }
     for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
         if (sets[c].failed) {
@@ -459,8 +492,8 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
             row.rate1[c] = r1 > row.rate1[c] ? r1 : row.rate1[c];
             row.raten[c] = rn > row.raten[c] ? rn : row.raten[c];
         }
-        free(sets[c].rays);
     }
+    free_ray_sets(sets);
     print_row(&row);
     if (o->csv)
         csv_row(o->csv, &row, o->threads);
@@ -482,6 +515,7 @@ int cmd_bench(int argc, char **argv)
     o.depth = 4;
     o.mailbox = 1;
     o.nvalidate = 20000;
+    o.repeat = 3;
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
     o.threads = ncpu > 0 ? (int)ncpu : 1;
     /* the default methods: naive, kaplan, sah (the view rules: --accel, or --paper) */
@@ -509,6 +543,8 @@ int cmd_bench(int argc, char **argv)
             o.mailbox = parse_on_off(&a, s);
         } else if (!strcmp(s, "--validate")) {
             o.nvalidate = parse_int(&a, s, 0, 100000000);
+        } else if (!strcmp(s, "--repeat")) {
+            o.repeat = parse_int(&a, s, 1, 100);
         } else if (!strcmp(s, "--csv")) {
             csv_path = opt_value(&a, s);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
