@@ -11,6 +11,7 @@
 #include <math.h>
 #include <setjmp.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 typedef void (*test_fn)(void);
@@ -86,6 +87,18 @@ char *harness_run(const char *cmd, int *status);
         if (!check_h_ || !strstr(check_h_, check_n_))                                       \
             harness_fail(__FILE__, __LINE__, "'%s' does not contain '%s'",                  \
                          check_h_ ? check_h_ : "(null)", check_n_);                         \
+    } while (0)
+
+/* Runs CMD (harness_run) and checks its exit status and that its output
+ * contains NEEDLE. */
+#define CHECK_RUN(cmd, want_status, needle)                                                 \
+    do {                                                                                    \
+        int check_st_;                                                                      \
+        char *check_out_ = harness_run((cmd), &check_st_);                                  \
+        REQUIRE(check_out_);                                                                \
+        CHECK_EQ_INT(check_st_, (want_status));                                             \
+        CHECK_STR_CONTAINS(check_out_, (needle));                                           \
+        free(check_out_);                                                                   \
     } while (0)
 
 #endif /* BSPRAY_TESTS_HARNESS_H */
