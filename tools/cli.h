@@ -45,9 +45,8 @@ int parse_build_arg(args *a, bsp_build_options *opts);
 extern const char build_args_help[];
 
 /* The SAH cost model of the command line: --costs, --empty-bonus and
- * --min-saving (also
- * taken by parse_build_arg) for the commands that build several structures
- * (bench, bench --paper, bench --scaling, viz). */
+ * --min-saving (also taken by parse_build_arg) for the commands that build
+ * several structures (bench, bench --paper, bench --scaling, viz). */
 typedef struct cost_args {
     bsp_sah_costs costs; /* 0 fields: the defaults */
     double empty_bonus;  /* as bsp_build_options.sah_empty_bonus */

@@ -55,17 +55,19 @@
  * over 4x the leaf with < 16 primitives (pbrt) or the node has fewer than
  * MIN_BAD_REFINE_PRIMS primitives. A subtree under a bad refine whose actual
  * cost is not below its leaf cost is retracted into one leaf afterwards
- * (Mitsuba). And a leaf when the best split pays but saves less than
- * min_saving mean tests per ray of the whole tree (its cell's surface area
- * over the root's, times leaf cost minus split cost): around a vertex
- * shared by several triangles every split of a cell "pays" a little, as the
- * cell shrinks towards the vertex, so without this limit such chains run to
- * the depth limit through cells only a few paddings wide (tetra: 60 % of
- * its leaves; docs/kdtree.md). The small-node limit: on 11 SPD scenes, bad refines of nodes
+ * (Mitsuba). The small-node limit: on 11 SPD scenes, bad refines of nodes
  * of 2-7 primitives changed render instructions by -0.05 to +0.2 % (the
  * rest of their subtrees were retracted) and cost 14-26 % of the build's
  * instructions; on shells, whose nested spheres need them, they happen at
  * large nodes.
+ *
+ * And a leaf when the best split pays but saves less than min_saving mean
+ * tests per ray of the whole tree (its cell's surface area over the root's,
+ * times leaf cost minus split cost, over the mean T_i): around a vertex
+ * shared by several triangles every split of a cell "pays" a little, as the
+ * cell shrinks towards the vertex, so without this limit such chains run to
+ * the depth limit through cells only a few paddings wide (tetra: 60 % of its
+ * leaves; docs/kdtree.md).
  *
  * Not used: min-max binning near the root (Mitsuba). Tried with 256 bins
  * above 4096 primitives, it saved ~15% of the build on balls but cost 6-8%
