@@ -467,7 +467,7 @@ TEST(sah_kind_name_and_defaults)
 /* The least saving of a split decides the root against a brute force: the
  * root's cell has probability 1, so its best split saves (leaf - best) /
  * mean T_i tests per ray. A limit just above that saving makes the root a
- * leaf, one just below keeps the split; the default limit (1e-11) and no
+ * leaf, one just below keeps the split; the default limit (1e-9) and no
  * limit both split it. */
 TEST(sah_min_saving_decides_the_root_split_by_its_saving)
 {

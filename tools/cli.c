@@ -246,7 +246,7 @@ static int in_saving_range(double x)
     "                     much, F in [0, 1) (default 0.1; 0: no bonus)\n"                   \
     "  --min-saving X     sah family: make a split only when it saves at least X mean\n"    \
     "                     intersection tests per ray of the whole tree, X >= 0 (default\n"  \
-    "                     1e-11: prunes chains of tiny cells at shared vertices; 0: none)\n"
+    "                     1e-9: prunes chains of tiny cells at shared vertices; 0: none)\n"
 
 int parse_cost_arg(args *a, cost_args *c)
 {

@@ -103,9 +103,9 @@ typedef struct bsp_build_options {
     double sah_min_saving;   /* sah family: a split that pays is made only when it saves
                                 at least this many mean intersection tests per ray: its
                                 cell's surface area over the root's, times its cost below
-                                the leaf's, over the mean T_i. 0: the default (1e-11,
-                                which prunes only the chains of cells a few paddings wide
-                                around shared vertices; docs/kdtree.md), negative: none */
+                                the leaf's, over the mean T_i. 0: the default (1e-9,
+                                which prunes the chains of tiny cells around shared
+                                vertices; docs/kdtree.md), negative: none */
     int sah_split_to_limits; /* sah family: 1 splits every node until max_depth or
                                 max_leaf_prims ends it (the paper's termination criteria);
                                 0 (default): also a leaf when the best split does not pay */

@@ -66,7 +66,7 @@
  * times leaf cost minus split cost, over the mean T_i): around a vertex
  * shared by several triangles every split of a cell "pays" a little, as the
  * cell shrinks towards the vertex, so without this limit such chains run to
- * the depth limit through cells only a few paddings wide (tetra: 60 % of its
+ * the depth limit through cells down to a few paddings wide (tetra: 60 % of its
  * leaves; docs/kdtree.md).
  *
  * Not used: min-max binning near the root (Mitsuba). Tried with 256 bins
