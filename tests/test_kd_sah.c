@@ -304,6 +304,15 @@ static double bf_best_root_cost(const bsp_scene *s, const kd_tree *t, const kd_c
     return best;
 }
 
+/* The leaf cost of the N primitives of PS: the sum of their T_i. */
+static double bf_leaf_cost(const bf_prim *ps, int n)
+{
+    double leaf = 0;
+    for (int i = 0; i < n; i++)
+        leaf += ps[i].cost;
+    return leaf;
+}
+
 /* A scene of 5..44 random spheres, triangles and quads (at most 64, for
  * bf_best_root_cost) in [-5, 5]^3 from SEED; returns it, *N its count. */
 static bsp_scene *random_small_scene(uint64_t seed, int *n_out)
@@ -343,9 +352,7 @@ TEST(sah_root_plane_is_the_brute_force_optimum)
         kd_cost_resolve(&o, &m);
         bf_prim ps[64];
         double best = bf_best_root_cost(s, t, &m, ps, n);
-        double leaf = 0;
-        for (int i = 0; i < n; i++)
-            leaf += ps[i].cost;
+        double leaf = bf_leaf_cost(ps, n);
         const kd_node *root = &t->nodes[0];
         if (best < leaf) {
             REQUIRE(!kd_is_leaf(root));
@@ -483,9 +490,7 @@ TEST(sah_min_saving_decides_the_root_split_by_its_saving)
         bf_prim ps[64];
         double best = bf_best_root_cost(s, tree_of(a), &m, ps, n);
         bsp_accel_destroy(a);
-        double leaf = 0;
-        for (int i = 0; i < n; i++)
-            leaf += ps[i].cost;
+        double leaf = bf_leaf_cost(ps, n);
         if (best < leaf) {
             double saving = (leaf - best) / (leaf / n);
             const double limit[4] = {saving * (1 + 1e-9), saving * (1 - 1e-9), -1.0, 0.0};
