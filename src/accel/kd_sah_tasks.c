@@ -288,7 +288,7 @@ static int splice(kd_tree *t, const sah_task *tk)
         if (kd_is_leaf(&x))
             x.u.first += pbase;
         else
-            x.bits = (uint32_t)((base + kd_child(&x) - 1) << 2) | kd_axis(&x);
+            x.bits = kd_pack((uint32_t)(base + kd_child(&x) - 1), kd_axis(&x));
         t->nodes[j == 0 ? tk->node : base + j - 1] = x;
     }
     t->nnodes = (uint32_t)(base + add);

@@ -82,12 +82,12 @@ int kd_reserve_prims(kd_tree *t, size_t more)
 
 int kd_make_leaf(kd_tree *t, uint32_t i, const uint32_t *prims, size_t n)
 {
-    if (n >= ((size_t)1 << 30) || !kd_reserve_prims(t, n))
+    if (n >= KD_MAX_LEAF_COUNT || !kd_reserve_prims(t, n))
         return 0;
     if (n > 0) /* prims may be NULL for an empty leaf */
         memcpy(t->prims + t->nprims, prims, n * sizeof *prims);
     t->nodes[i].u.first = (uint32_t)t->nprims;
-    t->nodes[i].bits = ((uint32_t)n << 2) | KD_LEAF_TAG;
+    t->nodes[i].bits = kd_pack((uint32_t)n, KD_LEAF_TAG);
     t->nprims += n;
     return 1;
 }
@@ -95,7 +95,7 @@ int kd_make_leaf(kd_tree *t, uint32_t i, const uint32_t *prims, size_t n)
 void kd_make_interior(kd_tree *t, uint32_t i, unsigned axis, float split, uint32_t child)
 {
     t->nodes[i].u.split = split;
-    t->nodes[i].bits = (child << 2) | axis;
+    t->nodes[i].bits = kd_pack(child, axis);
 }
 
 bsp_box kd_prim_box(const kd_tree *t, const bsp_scene *scene, uint32_t prim)

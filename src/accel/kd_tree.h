@@ -36,18 +36,32 @@
 #define KD_LEAF_TAG 3u
 
 typedef struct kd_node {
+    uint32_t bits; /* low 2 bits: axis 0..2, or KD_LEAF_TAG; bit 2: 0; upper
+                      29 bits (bits >> KD_INDEX_SHIFT): interior: index of
+                      the left child (right = left + 1); leaf: primitive
+                      count. So bits & ~7 of an interior node is the byte
+                      offset of its left child in the node array: the
+                      traversal's next address is one AND away from the
+                      load (kd_traverse.c). */
     union {
         float split;    /* interior: the plane's coordinate on `axis` */
         uint32_t first; /* leaf: first entry in kd_tree.prims */
     } u;
-    uint32_t bits; /* low 2 bits: axis 0..2, or KD_LEAF_TAG; upper 30 bits:
-                      interior: index of the left child (right = left + 1);
-                      leaf: primitive count */
 } kd_node;
 
 _Static_assert(sizeof(kd_node) == 8, "kd-tree nodes are 8 bytes");
 
-#define KD_MAX_NODES ((uint32_t)1 << 30)
+#define KD_INDEX_SHIFT 3
+#define KD_MAX_NODES ((uint32_t)1 << (32 - KD_INDEX_SHIFT))
+/* The most primitives one leaf can list. */
+#define KD_MAX_LEAF_COUNT ((size_t)1 << (32 - KD_INDEX_SHIFT))
+
+/* The bits of a node: index or count I (below 2^29) over the low tag LOW
+ * (an axis or KD_LEAF_TAG). */
+static inline uint32_t kd_pack(uint32_t i, unsigned low)
+{
+    return (i << KD_INDEX_SHIFT) | low;
+}
 
 static inline int kd_is_leaf(const kd_node *n)
 {
@@ -59,11 +73,11 @@ static inline unsigned kd_axis(const kd_node *n)
 }
 static inline uint32_t kd_child(const kd_node *n)
 {
-    return n->bits >> 2;
+    return n->bits >> KD_INDEX_SHIFT;
 }
 static inline uint32_t kd_count(const kd_node *n)
 {
-    return n->bits >> 2;
+    return n->bits >> KD_INDEX_SHIFT;
 }
 
 typedef struct kd_tree {
