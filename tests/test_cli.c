@@ -44,7 +44,7 @@ TEST(cli_bench_table_and_csv)
     CHECK(strncmp(line, "scene,N,accel,T_B,bytes,N_IN,N_V,N_EV,N_OIV,", 44) == 0);
     CHECK_STR_CONTAINS(line, ",N_IT,N_TS,");
     CHECK_STR_CONTAINS(line, "primary_Mrays_1t");
-    CHECK_STR_CONTAINS(line, ",T_B_all");
+    CHECK_STR_CONTAINS(line, ",T_B_all,model_cost");
     int rows = 0;
     while (fgets(line, sizeof line, f))
         rows++;
@@ -141,6 +141,21 @@ TEST(cli_stats_of_a_tree)
     CHECK_STR_CONTAINS(out, "primitives: 63");
     CHECK_STR_CONTAINS(out, "N_V");
     CHECK_STR_CONTAINS(out, "invariants     ok");
+    free(out);
+    /* with every cost 1 (a 4-gon: 0.5 + 4 x 0.125) the model cost is the
+     * expected cost with unit costs */
+    snprintf(cmd, sizeof cmd,
+             "%s stats spd:tree:4 --accel sah --costs "
+             "traversal=1,sphere=1,cone=1,triangle=1,polygon=0.5,vertex=0.125",
+             harness_cli());
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    const char *e = strstr(out, "expected cost"), *m = strstr(out, "model cost");
+    double ev = -1.0, mv = -2.0;
+    REQUIRE(e && m);
+    CHECK(sscanf(e, "expected cost %lf", &ev) == 1 && sscanf(m, "model cost %lf", &mv) == 1);
+    CHECK_MSG(ev > 1.0 && ev == mv, "expected %g, model %g", ev, mv);
     free(out);
 }
 

@@ -209,7 +209,8 @@ TEST(sah_splits_between_two_clusters)
 /* Two unit-diameter spheres 10 apart, T_sphere = 4, C_trav = 1: the split
  * at a sphere's bound (1 + 4 (6 + 42) / 46 = 5.17 < leaf 8) makes two leaves;
  * the tree's expected cost (traversal 1, intersection 1) is
- * 1 + (6 * 1 + 42 * 1) / 46, up to the padding. */
+ * 1 + (6 * 1 + 42 * 1) / 46, up to the padding, and its model cost (the
+ * build's costs) the split's cost. */
 TEST(sah_expected_cost_matches_hand_computation)
 {
     bsp_scene *s = bsp_scene_create();
@@ -226,8 +227,19 @@ TEST(sah_expected_cost_matches_hand_computation)
     CHECK_EQ_INT(st.leaves, 2);
     CHECK_EQ_INT(st.references, 2);
     CHECK_NEAR(st.expected_cost, 1.0 + 48.0 / 46.0, 1e-5);
+    /* under the build's own costs: the split's cost 1 + 4 (6 + 42) / 46 */
+    CHECK_NEAR(st.model_cost, 1.0 + 4.0 * 48.0 / 46.0, 1e-5);
     const kd_tree *t = tree_of(a);
     CHECK_EQ_INT(kd_axis(&t->nodes[0]), 0);
+    bsp_accel_destroy(a);
+    /* C_trav = 2 (the split still pays: 2 + 4.17 < 8): the model cost is in
+     * units of C_trav, (2 + 4 * 48 / 46) / 2 */
+    o.sah_costs.traversal = 2;
+    a = build(s, &o);
+    bsp_accel_tree_stats(a, &st);
+    CHECK_EQ_INT(st.interior_nodes, 1);
+    CHECK_NEAR(st.model_cost, 1.0 + 2.0 * 48.0 / 46.0, 1e-5);
+    o.sah_costs.traversal = 1;
     /* with T_sphere = 1 the split costs 1 + 48/46 > 2: one leaf */
     bsp_accel_destroy(a);
     o.sah_costs.sphere = 1;
@@ -236,6 +248,7 @@ TEST(sah_expected_cost_matches_hand_computation)
     CHECK_EQ_INT(st.interior_nodes, 0);
     CHECK_EQ_INT(st.references, 2);
     CHECK_NEAR(st.expected_cost, 2.0, 1e-12);
+    CHECK_NEAR(st.model_cost, 2.0, 1e-12);
     bsp_accel_destroy(a);
     bsp_scene_destroy(s);
 }

@@ -462,7 +462,7 @@ static const char stats_help[] =
     "camera, lights, materials, background, and load warnings. With --accel, also build\n"
     "that structure and print its figures with Havran's names (N_IN interior nodes, N_V\n"
     "leaves, N_EV empty leaves, N_OIV references in leaves, leaf depths, bytes, the expected\n"
-    "SAH cost, build time T_B).\n"
+    "SAH cost with unit costs and under the build's own costs, build time T_B).\n"
     "\n"
     "  --check            run the tree invariant checker too\n";
 
@@ -579,6 +579,9 @@ static int cmd_stats(int argc, char **argv)
         printf("  bytes          %" PRIu64 "\n", t.bytes);
         printf("  expected cost  %.3f (SAH, traversal and intersection cost 1)\n",
                t.expected_cost);
+        printf("  model cost     %.3f (SAH under the build's costs, in traversal steps; no\n"
+               "                 mailbox term)\n",
+               t.model_cost);
         if (check) {
             bsp_error err;
             if (bsp_accel_check(accel, &err) == BSP_OK) {

@@ -170,6 +170,10 @@ typedef struct bsp_tree_stats {
     double avg_leaf_depth;
     uint64_t bytes;       /* nodes + leaf index lists */
     double expected_cost; /* SAH cost of the finished tree (traversal 1, intersection 1) */
+    double model_cost;    /* the same under the build's cost model: C_trav per interior
+                             node, T_i per reference (bsp_build_options.sah_costs resolved:
+                             the calibrated defaults where 0, also for kaplan), surface
+                             area, without the mailbox term; in units of C_trav */
 } bsp_tree_stats;
 
 void bsp_accel_tree_stats(const bsp_accel *accel, bsp_tree_stats *stats);

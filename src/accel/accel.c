@@ -122,10 +122,13 @@ double bsp_accel_build_seconds(const bsp_accel *a)
 
 void bsp_accel_tree_stats(const bsp_accel *a, bsp_tree_stats *st)
 {
-    if (a->opts.kind == BSP_ACCEL_NAIVE)
+    if (a->opts.kind == BSP_ACCEL_NAIVE) {
         memset(st, 0, sizeof *st);
-    else
-        kd_tree_stats(a->impl, st);
+        return;
+    }
+    kd_cost_model m;
+    kd_cost_resolve(&a->opts, &m);
+    kd_tree_stats(a->impl, a->scene, &m.c, st);
 }
 
 bsp_status bsp_accel_check(const bsp_accel *a, bsp_error *err)

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "accel/kd_clip.h"
+#include "accel/kd_cost.h"
 #include "accel/kd_tree.h"
 #include "accel/kd_view.h"
 #include "geom/vec.h"
@@ -119,8 +120,11 @@ static double box_area(bsp_box b)
 typedef struct stats_walk {
     const kd_tree *t;
     bsp_tree_stats *st;
+    const bsp_scene *scene;
+    const bsp_sah_costs *costs;
     double depth_sum;
-    double cost; /* sum of area-weighted costs, divided by the root area at the end */
+    double cost;  /* sum of area-weighted costs, divided by the root area at the end */
+    double model; /* the same under COSTS */
 } stats_walk;
 
 static void stats_node(stats_walk *w, uint32_t i, bsp_box box, int depth)
@@ -134,11 +138,17 @@ static void stats_node(stats_walk *w, uint32_t i, bsp_box box, int depth)
         w->depth_sum += depth;
         if (depth > w->st->max_leaf_depth)
             w->st->max_leaf_depth = depth;
-        w->cost += box_area(box) * (double)c;
+        double area = box_area(box), tsum = 0.0;
+        const uint32_t *list = w->t->prims + n->u.first;
+        for (uint32_t j = 0; j < c; j++)
+            tsum += kd_prim_cost(w->scene, list[j], w->costs);
+        w->cost += area * (double)c;
+        w->model += area * tsum;
         return;
     }
     w->st->interior_nodes++;
     w->cost += box_area(box);
+    w->model += box_area(box) * w->costs->traversal;
     unsigned axis = kd_axis(n);
     bsp_box l = box, r = box;
     l.hi.v[axis] = r.lo.v[axis] = (double)n->u.split;
@@ -146,15 +156,17 @@ static void stats_node(stats_walk *w, uint32_t i, bsp_box box, int depth)
     stats_node(w, kd_child(n) + 1, r, depth + 1);
 }
 
-void kd_tree_stats(const kd_tree *t, bsp_tree_stats *st)
+void kd_tree_stats(const kd_tree *t, const bsp_scene *scene, const bsp_sah_costs *costs,
+                   bsp_tree_stats *st)
 {
     memset(st, 0, sizeof *st);
-    stats_walk w = {t, st, 0.0, 0.0};
+    stats_walk w = {t, st, scene, costs, 0.0, 0.0, 0.0};
     stats_node(&w, 0, t->box, 0);
     st->avg_leaf_depth = st->leaves ? w.depth_sum / (double)st->leaves : 0.0;
     st->bytes = (uint64_t)t->nnodes * sizeof(kd_node) + (uint64_t)t->nprims * sizeof(uint32_t);
     double root = box_area(t->box);
     st->expected_cost = root > 0 ? w.cost / root : 0.0;
+    st->model_cost = root > 0 ? w.model / root / costs->traversal : 0.0;
 }
 
 /* --- invariant checker -------------------------------------------------------------- */

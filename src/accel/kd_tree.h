@@ -129,7 +129,10 @@ HIDDEN void kd_sah_default_limits(bsp_build_options *o, const bsp_scene *scene);
 HIDDEN bsp_status kd_accel_build(bsp_accel *a, bsp_error *err);
 HIDDEN int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit);
 HIDDEN int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray);
-HIDDEN void kd_tree_stats(const kd_tree *t, bsp_tree_stats *st);
+/* The figures of T; the model cost under COSTS (every field > 0) with
+ * SCENE's primitives. */
+HIDDEN void kd_tree_stats(const kd_tree *t, const bsp_scene *scene, const bsp_sah_costs *costs,
+                          bsp_tree_stats *st);
 HIDDEN bsp_status kd_tree_visit(const kd_tree *t, int max_depth,
                                 int (*visit)(const bsp_cell_info *cell, void *ctx), void *ctx,
                                 bsp_error *err);
