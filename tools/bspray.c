@@ -689,7 +689,8 @@ static int cmd_calibrate(int argc, char **argv)
                "Measure the cost of a kd-tree traversal step and of one ray-primitive test for\n"
                "each primitive kind on this machine (ns), and print them with their ratios to\n"
                "the traversal step: the T_i of the SAH cost model. The built-in defaults were\n"
-               "measured this way (src/accel/kd_cost.c). Run it on a quiet machine; the\n"
+               "measured this way, except the triangle's, set lower from render timings\n"
+               "(src/accel/kd_cost.c, docs/kdtree.md). Run it on a quiet machine; the\n"
                "last line gives the --costs option that builds with the measured ratios.\n");
         return 0;
     }
