@@ -130,6 +130,62 @@ TEST(cli_bench_paper_counts)
     CHECK_EQ_INT(rows, 6); /* 3 rules x primary, all */
 }
 
+/* Field K (1-based, between '|') of the row of `bspray ab`'s table that
+ * starts with "| spd:", as two numbers "X / Y"; 0 when not found. */
+static int ab_pair(const char *out, int k, double *x, double *y)
+{
+    const char *row = strstr(out, "\n| spd:");
+    if (!row)
+        return 0;
+    row += 1; /* the '|' before field 1 */
+    for (int f = 1; f < k; f++) {
+        row = strchr(row + 1, '|');
+        if (!row)
+            return 0;
+    }
+    return sscanf(row + 1, " %lf / %lf", x, y) == 2;
+}
+
+/* Runs `bspray ab ARGS`; checks exit status 0, the rays column (RAYS) and
+ * that every ray got the same answer from A and B; *STEPS and *LEAVES get
+ * the N_TS and leaves of A ([0]) and B ([1]). */
+static void ab_run(const char *args, const char *rays, double steps[2], double leaves[2])
+{
+    char cmd[1024];
+    int st;
+    snprintf(cmd, sizeof cmd, "%s ab %s", harness_cli(), args);
+    char *out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    CHECK_STR_CONTAINS(out, "| B/A best |");
+    CHECK_STR_CONTAINS(out, rays);
+    CHECK_STR_CONTAINS(out, "| yes |");
+    CHECK(ab_pair(out, 7, &steps[0], &steps[1]));
+    CHECK(ab_pair(out, 9, &leaves[0], &leaves[1]));
+    free(out);
+}
+
+/* `bspray ab`: with no option of B the two trees are the same, so are their
+ * counters; Kaplan's tree differs from sah's but answers every ray alike. */
+TEST(cli_ab_times_two_structures_on_the_same_rays)
+{
+    double steps[2] = {-1, -2}, leaves[2] = {-1, -2};
+    ab_run("spd:tetra:3 --res 33 --rounds 1 --slice 100", "| 1089 primary |", steps, leaves);
+    CHECK(steps[0] > 1.0 && steps[0] == steps[1]);
+    CHECK(leaves[0] > 10 && leaves[0] == leaves[1]);
+    ab_run("spd:balls:2 --rays all --depth 2 --res 33 --rounds 2 --accel kaplan", " all |", steps,
+           leaves);
+    CHECK(leaves[0] > 10 && leaves[1] > 10 && leaves[0] != leaves[1]);
+    CHECK(steps[0] > 1.0 && steps[1] > steps[0]); /* Kaplan's tree: more steps */
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "%s ab spd:tetra:3 --rays some 2>&1", harness_cli());
+    CHECK_RUN(cmd, 2, "--rays: expected primary or all");
+    snprintf(cmd, sizeof cmd, "%s ab spd:tetra:3 --rounds 0 2>&1", harness_cli());
+    CHECK_RUN(cmd, 2, "'--rounds'");
+    snprintf(cmd, sizeof cmd, "%s ab 2>&1", harness_cli());
+    CHECK_RUN(cmd, 2, "missing SCENE");
+}
+
 TEST(cli_stats_of_a_tree)
 {
     char cmd[1024];

@@ -254,12 +254,8 @@ static int cmd_render(int argc, char **argv)
             json_path = opt_value(&a, s);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             quiet = 1;
-        } else if (s[0] == '-' && s[1]) {
-            die_usage(a.usage, "unknown option '%s'", s);
-        } else if (!scene_path) {
-            scene_path = s;
         } else {
-            die_usage(a.usage, "unexpected argument '%s'", s);
+            take_operand(&a, &scene_path);
         }
     }
     if (!scene_path)
@@ -368,12 +364,8 @@ static int cmd_trace(int argc, char **argv)
             parse_accel(&a, &bopts);
         } else if (!strcmp(s, "--mailbox")) {
             bopts.mailbox = parse_on_off(&a, s);
-        } else if (s[0] == '-' && s[1]) {
-            die_usage(a.usage, "unknown option '%s'", s);
-        } else if (!scene_path) {
-            scene_path = s;
         } else {
-            die_usage(a.usage, "unexpected argument '%s'", s);
+            take_operand(&a, &scene_path);
         }
     }
     if (!scene_path)
@@ -486,12 +478,8 @@ static int cmd_stats(int argc, char **argv)
             continue;
         } else if (!strcmp(s, "--check")) {
             check = 1;
-        } else if (s[0] == '-' && s[1]) {
-            die_usage(a.usage, "unknown option '%s'", s);
-        } else if (!scene_path) {
-            scene_path = s;
         } else {
-            die_usage(a.usage, "unexpected argument '%s'", s);
+            take_operand(&a, &scene_path);
         }
     }
     if (!scene_path)
@@ -642,12 +630,8 @@ static int cmd_gen(int argc, char **argv)
             tessellate = parse_int(&a, s, 2, 64);
         } else if (!strcmp(s, "-o") || !strcmp(s, "--output")) {
             out_path = opt_value(&a, s);
-        } else if (s[0] == '-' && s[1]) {
-            die_usage(a.usage, "unknown option '%s'", s);
-        } else if (!name) {
-            name = s;
         } else {
-            die_usage(a.usage, "unexpected argument '%s'", s);
+            take_operand(&a, &name);
         }
     }
     if (!name)
@@ -734,6 +718,8 @@ static void print_main_help(FILE *f)
             "  gen      write a built-in SPD scene as NFF\n"
             "  calibrate  measure the SAH's per-primitive intersection costs on this machine\n"
             "  viz      pictures of a kd-tree's cells: camera view and top view (PNG)\n"
+            "  ab       two structures (the default, and one changed by options) timed\n"
+            "           side by side on the same rays\n"
             "\n"
             "SCENE is an NFF file (.nff, .nff.gz) or spd:NAME[:SIZE], a built-in SPD scene:\n"
             "  %s\n",
@@ -769,6 +755,8 @@ int main(int argc, char **argv)
         return cmd_calibrate(argc - 1, argv + 1);
     if (!strcmp(cmd, "viz"))
         return cmd_viz(argc - 1, argv + 1);
+    if (!strcmp(cmd, "ab"))
+        return cmd_ab(argc - 1, argv + 1);
     fprintf(stderr, "%s: unknown command '%s'\n", prog, cmd);
     print_main_help(stderr);
     return EXIT_USAGE;

@@ -68,6 +68,16 @@ bsp_mixed_model parse_mixed_model(args *a, const char *opt)
     return BSP_MIXED_SURFACE;
 }
 
+void take_operand(args *a, const char **operand)
+{
+    const char *s = a->argv[a->i];
+    if (s[0] == '-' && s[1])
+        die_usage(a->usage, "unknown option '%s'", s);
+    if (*operand)
+        die_usage(a->usage, "unexpected argument '%s'", s);
+    *operand = s;
+}
+
 int is_help(const char *s)
 {
     return !strcmp(s, "-h") || !strcmp(s, "--help");

@@ -29,6 +29,9 @@ int parse_on_off(args *a, const char *opt);
 /* counted, sampled or surface: sah-mixed's model (--mixed-model). */
 bsp_mixed_model parse_mixed_model(args *a, const char *opt);
 int is_help(const char *s);
+/* The argument a->argv[a->i], which no option took: an unknown option or a
+ * second operand is a usage error; the first operand goes to *OPERAND. */
+void take_operand(args *a, const char **operand);
 /* A vector "x,y,z" as the value of OPT, or a usage error. */
 bsp_vec3 parse_vec3(args *a, const char *opt);
 /* A comma-separated list of methods (the value of --accel) into KINDS[0..MAX);
@@ -85,5 +88,6 @@ double now_seconds(void);
 /* The subcommands. */
 int cmd_bench(int argc, char **argv);
 int cmd_viz(int argc, char **argv);
+int cmd_ab(int argc, char **argv);
 
 #endif /* BSPRAY_TOOLS_CLI_H */

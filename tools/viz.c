@@ -178,12 +178,8 @@ int cmd_viz(int argc, char **argv)
             quiet = 1;
         } else if (parse_view_arg(&a, &view) || parse_cost_arg(&a, &costs)) {
             continue;
-        } else if (s[0] == '-' && s[1]) {
-            die_usage(a.usage, "unknown option '%s'", s);
-        } else if (!scene_path) {
-            scene_path = s;
         } else {
-            die_usage(a.usage, "unexpected argument '%s'", s);
+            take_operand(&a, &scene_path);
         }
     }
     if (!scene_path)

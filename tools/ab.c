@@ -1,0 +1,247 @@
+/*
+ * ab.c — `bspray ab`: two structures timed on the same rays, side by side.
+ *
+ * A is the default structure (bsp_build_options_defaults: sah); B is A
+ * changed by the build options on the command line (--accel, --costs,
+ * --empty-bonus, --max-depth, ...). The rays of one render are recorded
+ * once; then each round shoots them through A and B in alternating slices,
+ * the order alternating from slice to slice and from round to round, on one
+ * thread, timed by the thread's CPU time. This VM's speed swings within
+ * seconds, by more than most changes one wants to measure: rates taken in
+ * separate runs (or even separate passes) cannot show a few percent, while
+ * two methods that share every slice see the same machine (two identical
+ * trees measure within about 0.5 %; docs/kdtree.md).
+ *
+ * Every ray's answer from B must equal A's (primitive, t bit for bit, the
+ * occlusion answer): both are exact, so a difference is a bug, reported
+ * with exit status 1.
+ */
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bench.h"
+#include "cli.h"
+
+static const char ab_usage[] =
+    "bspray ab SCENE [OPTIONS OF B...] [--res N] [--depth N] [--rays primary|all]\n"
+    "                [--rounds R] [--slice N]";
+
+static const char ab_help[] =
+    "Time two structures on the same rays: A, the default (sah with the default costs), and\n"
+    "B, A changed by the build options given. The rays of a RES x RES render of SCENE are\n"
+    "recorded once (the primary rays, or every ray to --depth); each round then shoots them\n"
+    "through A and B in alternating slices, on one thread, by its CPU time, so that both\n"
+    "see the same machine. Prints the rays per second of both, B over A (the ratio of the\n"
+    "best rounds, and the median of the rounds' ratios), and per ray the traversal steps\n"
+    "N_TS, the intersection tests N_IT and the leaves of each tree. Every ray must get the\n"
+    "same answer from both (primitive, t, occlusion): exit status 1 if not.\n"
+    "\n"
+    "  --res N            N x N rays, SPD corner sampling (default 513)\n"
+    "  --depth N          ray depth of the recorded render with --rays all (default 4)\n"
+    "  --rays primary|all the primary rays only (default), or every ray of the render\n"
+    "                     (shadow rays as occlusion queries)\n"
+    "  --rounds R         rounds (default 5)\n"
+    "  --slice N          rays per slice (default 2048)\n"
+    "\n"
+    "Options of B (A keeps the defaults):\n";
+
+typedef struct ray_rec {
+    bsp_ray *rays;
+    uint8_t *cls;
+    size_t n, cap;
+    int all; /* record every class, not only primary rays */
+    int oom;
+} ray_rec;
+
+static void record(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
+{
+    ray_rec *r = ctx;
+    if ((!r->all && cls != BSP_RAY_PRIMARY) || r->oom)
+        return;
+    if (r->n == r->cap) {
+        size_t cap = r->cap ? 2 * r->cap : 4096;
+        bsp_ray *nr = realloc(r->rays, cap * sizeof *nr);
+        uint8_t *nc = nr ? realloc(r->cls, cap) : NULL;
+        if (nr)
+            r->rays = nr;
+        if (!nr || !nc) {
+            r->oom = 1;
+            return;
+        }
+        r->cls = nc;
+        r->cap = cap;
+    }
+    r->cls[r->n] = (uint8_t)cls;
+    r->rays[r->n++] = *ray;
+}
+
+/* One ray through ACCEL: its answer as (hit, primitive, t); shadow rays as
+ * occlusion queries. */
+typedef struct answer {
+    int hit;
+    uint32_t prim;
+    double t;
+} answer;
+
+static answer shoot(const bsp_accel *accel, bsp_query *q, const bsp_ray *ray, int shadow)
+{
+    answer a = {0, BSP_NO_PRIM, 0.0};
+    if (shadow) {
+        a.hit = bsp_occluded(accel, q, ray);
+        return a;
+    }
+    bsp_hit h;
+    a.hit = bsp_intersect(accel, q, ray, &h);
+    if (a.hit) {
+        a.prim = h.prim;
+        a.t = h.t;
+    }
+    return a;
+}
+
+/* CPU seconds of shooting RAYS[from..to) through ACCEL. */
+static double slice_seconds(const bsp_accel *accel, bsp_query *q, const ray_rec *r, size_t from,
+                            size_t to)
+{
+    size_t sink = 0;
+    double t0 = bench_cpu_seconds();
+    for (size_t i = from; i < to; i++)
+        sink += (size_t)shoot(accel, q, &r->rays[i], r->cls[i] == BSP_RAY_SHADOW).hit;
+    double dt = bench_cpu_seconds() - t0;
+    return sink == SIZE_MAX ? dt + 1.0 : dt; /* SINK is read: the loop stays */
+}
+
+static int cmp_double(const void *x, const void *y)
+{
+    double a = *(const double *)x, b = *(const double *)y;
+    return (a > b) - (a < b);
+}
+
+int cmd_ab(int argc, char **argv)
+{
+    args a = {argc, 1, argv, ab_usage};
+    const char *scene_path = NULL;
+    int res = 513, depth = 4, all = 0, rounds = 5, slice = 2048;
+    bsp_build_options ob;
+    bsp_build_options_defaults(&ob);
+    for (; a.i < argc; a.i++) {
+        const char *s = argv[a.i];
+        if (is_help(s)) {
+            printf("usage: %s\n\n%s%s", ab_usage, ab_help, build_args_help);
+            return 0;
+        } else if (parse_build_arg(&a, &ob)) {
+            continue;
+        } else if (!strcmp(s, "--res")) {
+            res = parse_int(&a, s, 2, 8192);
+        } else if (!strcmp(s, "--depth")) {
+            depth = parse_int(&a, s, 0, 64);
+        } else if (!strcmp(s, "--rounds")) {
+            rounds = parse_int(&a, s, 1, 1000);
+        } else if (!strcmp(s, "--slice")) {
+            slice = parse_int(&a, s, 1, 1 << 24);
+        } else if (!strcmp(s, "--rays")) {
+            const char *v = opt_value(&a, s);
+            if (!strcmp(v, "all"))
+                all = 1;
+            else if (!strcmp(v, "primary"))
+                all = 0;
+            else
+                die_usage(a.usage, "--rays: expected primary or all, got '%s'", v);
+        } else {
+            take_operand(&a, &scene_path);
+        }
+    }
+    if (!scene_path)
+        die_usage(a.usage, "%s", "missing SCENE");
+    bsp_scene *scene = load_scene(scene_path);
+    bsp_build_options oa;
+    bsp_build_options_defaults(&oa);
+    oa.threads = ob.threads;
+    bsp_accel *A = build_accel(scene, &oa), *B = build_accel(scene, &ob);
+
+    ray_rec rec = {0};
+    rec.all = all;
+    bsp_render_options ro;
+    bsp_render_options_defaults(&ro);
+    ro.width = ro.height = res;
+    ro.max_depth = all ? depth : 0;
+    ro.threads = 1;
+    ro.ray_log = record;
+    ro.ray_log_ctx = &rec;
+    bsp_image *img = NULL;
+    bsp_error err;
+    if (bsp_render(A, &ro, &img, NULL, &err) != BSP_OK || rec.oom) {
+        fprintf(stderr, "%s: %s: %s\n", prog, scene_path, rec.oom ? "out of memory" : err.message);
+        return EXIT_INPUT;
+    }
+    bsp_image_destroy(img);
+
+    bsp_query *qa = bsp_query_create(A), *qb = bsp_query_create(B);
+    double *ratio = malloc((size_t)rounds * sizeof *ratio);
+    if (!qa || !qb || !ratio) {
+        fprintf(stderr, "%s: out of memory\n", prog);
+        return EXIT_INPUT;
+    }
+    /* the answers, and the per-ray counters of one untimed pass */
+    size_t differ = 0, first_differ = SIZE_MAX;
+    for (size_t i = 0; i < rec.n; i++) {
+        int shadow = rec.cls[i] == BSP_RAY_SHADOW;
+        answer x = shoot(A, qa, &rec.rays[i], shadow), y = shoot(B, qb, &rec.rays[i], shadow);
+        if (x.hit != y.hit || x.prim != y.prim || x.t != y.t) {
+            if (!differ)
+                first_differ = i;
+            differ++;
+        }
+    }
+    bsp_query_counters ca = *bsp_query_get_counters(qa), cb = *bsp_query_get_counters(qb);
+    double best_a = 1e300, best_b = 1e300;
+    for (int round = 0; round < rounds; round++) {
+        double ta = 0.0, tb = 0.0;
+        for (size_t from = 0, k = 0; from < rec.n; from += (size_t)slice, k++) {
+            size_t to = rec.n - from < (size_t)slice ? rec.n : from + (size_t)slice;
+            if ((k + (size_t)round) % 2 == 0) {
+                ta += slice_seconds(A, qa, &rec, from, to);
+                tb += slice_seconds(B, qb, &rec, from, to);
+            } else {
+                tb += slice_seconds(B, qb, &rec, from, to);
+                ta += slice_seconds(A, qa, &rec, from, to);
+            }
+        }
+        best_a = ta < best_a ? ta : best_a;
+        best_b = tb < best_b ? tb : best_b;
+        ratio[round] = tb > 0.0 ? ta / tb : 0.0;
+    }
+    qsort(ratio, (size_t)rounds, sizeof *ratio, cmp_double);
+    int h = rounds / 2;
+    double median = rounds % 2 ? ratio[h] : 0.5 * (ratio[h - 1] + ratio[h]);
+
+    bsp_tree_stats sa, sb;
+    bsp_accel_tree_stats(A, &sa);
+    bsp_accel_tree_stats(B, &sb);
+    double n = rec.n ? (double)rec.n : 1.0;
+    printf("| scene | rays | A Mrays/s | B Mrays/s | B/A best | B/A median | N_TS A / B | "
+           "N_IT A / B | leaves A / B | same answers |\n");
+    printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+    printf("| %s | %zu %s | %.3f | %.3f | %.4f | %.4f | %.2f / %.2f | %.3f / %.3f | %" PRIu64
+           " / %" PRIu64 " | %s |\n",
+           scene_path, rec.n, all ? "all" : "primary",
+           best_a > 0.0 ? (double)rec.n / best_a * 1e-6 : 0.0,
+           best_b > 0.0 ? (double)rec.n / best_b * 1e-6 : 0.0, best_b > 0.0 ? best_a / best_b : 0.0,
+           median, (double)ca.traversal_steps / n, (double)cb.traversal_steps / n,
+           (double)ca.isect_tests / n, (double)cb.isect_tests / n, sa.leaves, sb.leaves,
+           differ ? "NO" : "yes");
+    if (differ)
+        fprintf(stderr, "%s: %s: %zu of %zu rays got different answers from A and B (first: ray %zu)\n",
+                prog, scene_path, differ, rec.n, first_differ);
+    free(ratio);
+    free(rec.rays);
+    free(rec.cls);
+    bsp_query_destroy(qa);
+    bsp_query_destroy(qb);
+    bsp_accel_destroy(A);
+    bsp_accel_destroy(B);
+    bsp_scene_destroy(scene);
+    return differ ? EXIT_INPUT : 0;
+}
