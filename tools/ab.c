@@ -47,36 +47,6 @@ static const char ab_help[] =
     "\n"
     "Options of B (A keeps the defaults):\n";
 
-typedef struct ray_rec {
-    bsp_ray *rays;
-    uint8_t *cls;
-    size_t n, cap;
-    int all; /* record every class, not only primary rays */
-    int oom;
-} ray_rec;
-
-static void record(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
-{
-    ray_rec *r = ctx;
-    if ((!r->all && cls != BSP_RAY_PRIMARY) || r->oom)
-        return;
-    if (r->n == r->cap) {
-        size_t cap = r->cap ? 2 * r->cap : 4096;
-        bsp_ray *nr = realloc(r->rays, cap * sizeof *nr);
-        uint8_t *nc = nr ? realloc(r->cls, cap) : NULL;
-        if (nr)
-            r->rays = nr;
-        if (!nr || !nc) {
-            r->oom = 1;
-            return;
-        }
-        r->cls = nc;
-        r->cap = cap;
-    }
-    r->cls[r->n] = (uint8_t)cls;
-    r->rays[r->n++] = *ray;
-}
-
 /* One ray through ACCEL: its answer as (hit, primitive, t); shadow rays as
  * occlusion queries. */
 typedef struct answer {
@@ -101,16 +71,15 @@ static answer shoot(const bsp_accel *accel, bsp_query *q, const bsp_ray *ray, in
     return a;
 }
 
-/* CPU seconds of shooting RAYS[from..to) through ACCEL. */
-static double slice_seconds(const bsp_accel *accel, bsp_query *q, const ray_rec *r, size_t from,
-                            size_t to)
+/* CPU seconds of shooting RAYS[from..to) through ACCEL (SHADOW: as
+ * occlusion queries). The calls update the query's counters, so they stay. */
+static double slice_seconds(const bsp_accel *accel, bsp_query *q, const bsp_ray *rays,
+                            size_t from, size_t to, int shadow)
 {
-    size_t sink = 0;
     double t0 = bench_cpu_seconds();
     for (size_t i = from; i < to; i++)
-        sink += (size_t)shoot(accel, q, &r->rays[i], r->cls[i] == BSP_RAY_SHADOW).hit;
-    double dt = bench_cpu_seconds() - t0;
-    return sink == SIZE_MAX ? dt + 1.0 : dt; /* SINK is read: the loop stays */
+        (void)shoot(accel, q, &rays[i], shadow);
+    return bench_cpu_seconds() - t0;
 }
 
 static int cmp_double(const void *x, const void *y)
@@ -161,22 +130,31 @@ int cmd_ab(int argc, char **argv)
     oa.threads = ob.threads;
     bsp_accel *A = build_accel(scene, &oa), *B = build_accel(scene, &ob);
 
-    ray_rec rec = {0};
-    rec.all = all;
+    /* the rays: every class, or the primary rays alone (a depth-0 render
+     * also spawns shadow rays; they are not used then) */
+    bench_ray_set sets[BSP_RAY_CLASS_COUNT];
+    memset(sets, 0, sizeof sets);
     bsp_render_options ro;
     bsp_render_options_defaults(&ro);
     ro.width = ro.height = res;
     ro.max_depth = all ? depth : 0;
     ro.threads = 1;
-    ro.ray_log = record;
-    ro.ray_log_ctx = &rec;
+    ro.ray_log = bench_log_ray;
+    ro.ray_log_ctx = sets;
     bsp_image *img = NULL;
     bsp_error err;
-    if (bsp_render(A, &ro, &img, NULL, &err) != BSP_OK || rec.oom) {
-        fprintf(stderr, "%s: %s: %s\n", prog, scene_path, rec.oom ? "out of memory" : err.message);
+    int failed = bsp_render(A, &ro, &img, NULL, &err) != BSP_OK;
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++)
+        failed |= sets[c].failed;
+    if (failed) {
+        fprintf(stderr, "%s: %s: %s\n", prog, scene_path, img ? "out of memory" : err.message);
         return EXIT_INPUT;
     }
     bsp_image_destroy(img);
+    const int nclasses = all ? BSP_RAY_CLASS_COUNT : 1; /* BSP_RAY_PRIMARY is 0 */
+    size_t nrays = 0;
+    for (int c = 0; c < nclasses; c++)
+        nrays += sets[c].n;
 
     bsp_query *qa = bsp_query_create(A), *qb = bsp_query_create(B);
     double *ratio = malloc((size_t)rounds * sizeof *ratio);
@@ -185,28 +163,33 @@ int cmd_ab(int argc, char **argv)
         return EXIT_INPUT;
     }
     /* the answers, and the per-ray counters of one untimed pass */
-    size_t differ = 0, first_differ = SIZE_MAX;
-    for (size_t i = 0; i < rec.n; i++) {
-        int shadow = rec.cls[i] == BSP_RAY_SHADOW;
-        answer x = shoot(A, qa, &rec.rays[i], shadow), y = shoot(B, qb, &rec.rays[i], shadow);
-        if (x.hit != y.hit || x.prim != y.prim || x.t != y.t) {
-            if (!differ)
-                first_differ = i;
-            differ++;
+    size_t differ = 0;
+    for (int c = 0; c < nclasses; c++) {
+        for (size_t i = 0; i < sets[c].n; i++) {
+            const bsp_ray *r = &sets[c].rays[i];
+            int shadow = c == BSP_RAY_SHADOW;
+            answer x = shoot(A, qa, r, shadow), y = shoot(B, qb, r, shadow);
+            differ += x.hit != y.hit || x.prim != y.prim || x.t != y.t;
         }
     }
     bsp_query_counters ca = *bsp_query_get_counters(qa), cb = *bsp_query_get_counters(qb);
     double best_a = 1e300, best_b = 1e300;
     for (int round = 0; round < rounds; round++) {
         double ta = 0.0, tb = 0.0;
-        for (size_t from = 0, k = 0; from < rec.n; from += (size_t)slice, k++) {
-            size_t to = rec.n - from < (size_t)slice ? rec.n : from + (size_t)slice;
-            if ((k + (size_t)round) % 2 == 0) {
-                ta += slice_seconds(A, qa, &rec, from, to);
-                tb += slice_seconds(B, qb, &rec, from, to);
-            } else {
-                tb += slice_seconds(B, qb, &rec, from, to);
-                ta += slice_seconds(A, qa, &rec, from, to);
+        size_t k = 0; /* slices so far: the order alternates with each */
+        for (int c = 0; c < nclasses; c++) {
+            const bsp_ray *rays = sets[c].rays;
+            size_t n = sets[c].n;
+            int shadow = c == BSP_RAY_SHADOW;
+            for (size_t from = 0; from < n; from += (size_t)slice, k++) {
+                size_t to = n - from < (size_t)slice ? n : from + (size_t)slice;
+                if ((k + (size_t)round) % 2 == 0) {
+                    ta += slice_seconds(A, qa, rays, from, to, shadow);
+                    tb += slice_seconds(B, qb, rays, from, to, shadow);
+                } else {
+                    tb += slice_seconds(B, qb, rays, from, to, shadow);
+                    ta += slice_seconds(A, qa, rays, from, to, shadow);
+                }
             }
         }
         best_a = ta < best_a ? ta : best_a;
@@ -220,24 +203,22 @@ int cmd_ab(int argc, char **argv)
     bsp_tree_stats sa, sb;
     bsp_accel_tree_stats(A, &sa);
     bsp_accel_tree_stats(B, &sb);
-    double n = rec.n ? (double)rec.n : 1.0;
+    double n = nrays ? (double)nrays : 1.0;
     printf("| scene | rays | A Mrays/s | B Mrays/s | B/A best | B/A median | N_TS A / B | "
            "N_IT A / B | leaves A / B | same answers |\n");
     printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
     printf("| %s | %zu %s | %.3f | %.3f | %.4f | %.4f | %.2f / %.2f | %.3f / %.3f | %" PRIu64
            " / %" PRIu64 " | %s |\n",
-           scene_path, rec.n, all ? "all" : "primary",
-           best_a > 0.0 ? (double)rec.n / best_a * 1e-6 : 0.0,
-           best_b > 0.0 ? (double)rec.n / best_b * 1e-6 : 0.0, best_b > 0.0 ? best_a / best_b : 0.0,
+           scene_path, nrays, all ? "all" : "primary", best_a > 0.0 ? n / best_a * 1e-6 : 0.0,
+           best_b > 0.0 ? n / best_b * 1e-6 : 0.0, best_b > 0.0 ? best_a / best_b : 0.0,
            median, (double)ca.traversal_steps / n, (double)cb.traversal_steps / n,
            (double)ca.isect_tests / n, (double)cb.isect_tests / n, sa.leaves, sb.leaves,
            differ ? "NO" : "yes");
     if (differ)
-        fprintf(stderr, "%s: %s: %zu of %zu rays got different answers from A and B (first: ray %zu)\n",
-                prog, scene_path, differ, rec.n, first_differ);
+        fprintf(stderr, "%s: %s: %zu of %zu rays got different answers from A and B\n", prog,
+                scene_path, differ, nrays);
     free(ratio);
-    free(rec.rays);
-    free(rec.cls);
+    bench_free_ray_sets(sets);
     bsp_query_destroy(qa);
     bsp_query_destroy(qb);
     bsp_accel_destroy(A);

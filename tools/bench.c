@@ -109,13 +109,7 @@ static void print_help(void)
 
 /* --- recorded rays ------------------------------------------------------------ */
 
-typedef struct ray_set {
-    bsp_ray *rays;
-    size_t n, cap;
-    int failed;
-} ray_set;
-
-static void free_ray_sets(ray_set sets[BSP_RAY_CLASS_COUNT])
+void bench_free_ray_sets(bench_ray_set sets[BSP_RAY_CLASS_COUNT])
 {
     for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
         free(sets[c].rays);
@@ -123,9 +117,9 @@ static void free_ray_sets(ray_set sets[BSP_RAY_CLASS_COUNT])
     }
 }
 
-static void log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
+void bench_log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
 {
-    ray_set *set = &((ray_set *)ctx)[cls];
+    bench_ray_set *set = &((bench_ray_set *)ctx)[cls];
     if (set->failed)
         return;
     if (set->n == set->cap) {
@@ -181,7 +175,7 @@ static void *shoot_main(void *arg)
 #define SHOOT_REPEATS 3
 
 /* Mrays/s of shooting SET with THREADS threads (0 when the set is empty). */
-static double shoot_rate(const bsp_accel *accel, const ray_set *set, int any, int threads)
+static double shoot_rate(const bsp_accel *accel, const bench_ray_set *set, int any, int threads)
 {
     if (set->n == 0)
         return 0.0;
@@ -418,14 +412,14 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
         }
     }
 
-    ray_set sets[BSP_RAY_CLASS_COUNT];
+    bench_ray_set sets[BSP_RAY_CLASS_COUNT];
     memset(sets, 0, sizeof sets);
     bsp_render_options ro;
     bsp_render_options_defaults(&ro);
     ro.width = ro.height = o->res;
     ro.max_depth = o->depth;
     ro.threads = 1;
-    ro.ray_log = log_ray;
+    ro.ray_log = bench_log_ray;
     ro.ray_log_ctx = sets;
     bsp_image *img = NULL;
     bsp_render_stats st;
@@ -435,7 +429,7 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     if (bsp_render(accel, &ro, &img, &st, &err) != BSP_OK) {
         fprintf(stderr, "%s: %s: %s\n", prog, scene_name, err.message);
         bsp_accel_destroy(accel);
-        free_ray_sets(sets);
+        bench_free_ray_sets(sets);
         return 1;
     }
     bsp_image_destroy(img);
@@ -471,7 +465,7 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
         if (rs != BSP_OK) {
             fprintf(stderr, "%s: %s: %s\n", prog, scene_name, err.message);
             bsp_accel_destroy(accel);
-            free_ray_sets(sets);
+            bench_free_ray_sets(sets);
             return 1;
         }
         bsp_image_destroy(img);
@@ -493,7 +487,7 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
             row.raten[c] = rn > row.raten[c] ? rn : row.raten[c];
         }
     }
-    free_ray_sets(sets);
+    bench_free_ray_sets(sets);
     print_row(&row);
     if (o->csv)
         csv_row(o->csv, &row, o->threads);

@@ -16,6 +16,17 @@
 long bench_validate(const bsp_accel *accel, const bsp_accel *naive, const bsp_scene *scene,
                     int nrand, char *what, size_t what_size);
 
+/* The rays of one class recorded from a render: a render's ray_log is
+ * bench_log_ray with an array of BSP_RAY_CLASS_COUNT sets, zeroed, as its
+ * context; FAILED when out of memory (the set is then incomplete). */
+typedef struct bench_ray_set {
+    bsp_ray *rays;
+    size_t n, cap;
+    int failed;
+} bench_ray_set;
+void bench_log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx);
+void bench_free_ray_sets(bench_ray_set sets[BSP_RAY_CLASS_COUNT]);
+
 /* The CPU time of the calling thread, in seconds. */
 double bench_cpu_seconds(void);
 
