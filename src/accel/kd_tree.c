@@ -147,8 +147,9 @@ static void stats_node(stats_walk *w, uint32_t i, bsp_box box, int depth)
         return;
     }
     w->st->interior_nodes++;
-    w->cost += box_area(box);
-    w->model += box_area(box) * w->costs->traversal;
+    double area = box_area(box);
+    w->cost += area;
+    w->model += area * w->costs->traversal;
     unsigned axis = kd_axis(n);
     bsp_box l = box, r = box;
     l.hi.v[axis] = r.lo.v[axis] = (double)n->u.split;
