@@ -1029,6 +1029,91 @@ TEST(sah_clip_is_conservative_and_tight)
     kd_clip_scratch_free(&scr);
 }
 
+/* A point of the cone (BASE, radius RB) -> (APEX, radius RA) at axis
+ * fraction F and angle TH. */
+static bsp_vec3 cone_point(bsp_vec3 base, double rb, bsp_vec3 apex, double ra, double f,
+                           double th)
+{
+    bsp_vec3 a = v3_normalize(v3_sub(apex, base));
+    bsp_vec3 helper = fabs(a.x) < 0.6 ? bsp_v3(1, 0, 0) : bsp_v3(0, 1, 0);
+    bsp_vec3 u = v3_normalize(v3_cross(a, helper)), w = v3_cross(a, u);
+    bsp_vec3 c = v3_add(base, v3_scale(v3_sub(apex, base), f));
+    double r = rb + (ra - rb) * f;
+    return v3_add(c, v3_add(v3_scale(u, r * cos(th)), v3_scale(w, r * sin(th))));
+}
+
+/* Cones clipped to boxes: every surface point in the box lies in the
+ * clipped bounds (random cones, a third of them along a coordinate axis,
+ * some cylinders), and the bounds are tighter than the cone's bounds ∩ box
+ * where they should be: the axis range of a slanted cylinder, the circle of
+ * a cylinder along an axis (a box inside the tube, or in the corner of its
+ * bounding square, does not meet the surface). */
+TEST(sah_clip_cones_is_conservative_and_tight)
+{
+    rng_state = 777;
+    int trials = quick() ? 100 : 400, met = 0;
+    for (int trial = 0; trial < trials; trial++) {
+        bsp_scene *s = bsp_scene_create();
+        bsp_error err;
+        bsp_vec3 b = bsp_v3(rnd_in(-3, 3), rnd_in(-3, 3), rnd_in(-3, 3)), a;
+        if (trial % 3 == 0) { /* along a coordinate axis */
+            a = b;
+            a.v[trial / 3 % 3] += rnd_in(0.5, 4) * (rnd() < 0.5 ? -1 : 1);
+        } else {
+            a = bsp_v3(rnd_in(-3, 3), rnd_in(-3, 3), rnd_in(-3, 3));
+        }
+        double rb = rnd_in(0.05, 1.5), ra = trial % 4 == 1 ? rb : rnd_in(0, 1.5);
+        REQUIRE(bsp_scene_add_cone(s, b, rb, a, ra, &err) == BSP_OK);
+        bsp_box box;
+        for (int k = 0; k < 3; k++) {
+            double x = rnd_in(-3, 3), y = rnd_in(-3, 3);
+            box.lo.v[k] = fmin(x, y);
+            box.hi.v[k] = fmax(x, y);
+        }
+        double pad = 3e-7;
+        bsp_box out;
+        int r = kd_clip_prim(s, 0, &box, pad, NULL, &out);
+        REQUIRE(r >= 0);
+        int inside = 0;
+        for (int i = 0; i <= 200; i++)
+            for (int j = 0; j < 64; j++) {
+                bsp_vec3 p = cone_point(b, rb, a, ra, i / 200.0, 2 * BSP_PI * j / 64);
+                if (!in_box(p, &box))
+                    continue;
+                inside++;
+                CHECK_MSG(r == 1 && in_box(p, &out),
+                          "trial %d: a point of the cone in the box lies outside its clipped "
+                          "bounds",
+                          trial);
+            }
+        met += inside > 0;
+        bsp_scene_destroy(s);
+    }
+    CHECK(met > trials / 10);
+
+    bsp_scene *s = bsp_scene_create();
+    bsp_error err;
+    /* a slanted cylinder: the part with x in [0, 1] lies near the start */
+    REQUIRE(bsp_scene_add_cone(s, bsp_v3(0, 0, 0), 0.1, bsp_v3(10, 10, 10), 0.1, &err) ==
+            BSP_OK);
+    bsp_box slab = {bsp_v3(0, -20, -20), bsp_v3(1, 20, 20)}, out;
+    REQUIRE(kd_clip_prim(s, 0, &slab, 1e-6, NULL, &out) == 1);
+    CHECK(out.hi.v[1] < 1.2 && out.hi.v[2] < 1.2 && out.lo.v[1] > -0.2);
+    CHECK(out.hi.v[1] > 1.0 && out.lo.v[1] < 0.0); /* and still holds the part */
+    /* a cylinder along z around the z axis, radius 1 */
+    REQUIRE(bsp_scene_add_cone(s, bsp_v3(0, 0, -5), 1, bsp_v3(0, 0, 5), 1, &err) == BSP_OK);
+    bsp_box in_tube = {bsp_v3(-0.5, -0.5, -1), bsp_v3(0.5, 0.5, 1)};
+    CHECK_EQ_INT(kd_clip_prim(s, 1, &in_tube, 1e-6, NULL, &out), 0);
+    bsp_box corner = {bsp_v3(0.8, 0.8, -1), bsp_v3(2, 2, 1)};
+    CHECK_EQ_INT(kd_clip_prim(s, 1, &corner, 1e-6, NULL, &out), 0);
+    bsp_box side = {bsp_v3(0.5, -2, -1), bsp_v3(2, 2, 1)};
+    REQUIRE(kd_clip_prim(s, 1, &side, 1e-6, NULL, &out) == 1);
+    CHECK(out.lo.v[0] >= 0.5 - 2e-6 && out.hi.v[0] <= 1 + 2e-6);
+    CHECK(out.hi.v[1] <= sqrt(0.75) + 1e-5 && out.hi.v[1] >= sqrt(0.75));
+    CHECK(out.lo.v[2] >= -1 - 2e-6 && out.hi.v[2] <= 1 + 2e-6);
+    bsp_scene_destroy(s);
+}
+
 /* Rays with subnormal direction components crossing a plane at 0 from an
  * origin a subnormal distance away: the traversal's reciprocal 1 / d
  * overflows there (kd_traverse.c falls back to the quotient). Kaplan's

@@ -1,7 +1,7 @@
 /*
  * kd_clip.c — split-clipped bounds of a primitive against a box (contract in
  * kd_clip.h): Sutherland–Hodgman for triangles and polygons, the ball ∩ box
- * for spheres, bounds ∩ box for cones.
+ * for spheres, the axis range and cross-section circles for cones.
  *
  * Rounding: a clipped vertex gets the plane's coordinate exactly and its
  * other coordinates by interpolation, each within a few ulps of the true
@@ -244,6 +244,101 @@ static int clip_sphere(const sphere_shape *s, const bsp_box *g, bsp_box *b)
     return 1;
 }
 
+/* The parameters [*H0, *H1] (within [0, length]) of the cone's axis at which
+ * the box of its cross-section circle can meet G: on each axis k that box is
+ * [lo_k(h), hi_k(h)], both linear in h, and lo_k(h) <= G.hi_k, hi_k(h) >= G.lo_k
+ * are linear inequalities a h <= b. Each b gets a tolerance of 1e-12 of the
+ * magnitudes involved (far below the padding, far above rounding), so the
+ * interval only widens; 0 when it is empty (the cone misses G). */
+static int cone_axis_range(const cone_shape *c, const bsp_box *g, const double s[3], double *h0,
+                           double *h1)
+{
+    const double r0 = c->base_radius, sl = c->slope, len = c->length;
+    const double rmax = dmax(r0, c->apex_radius);
+    double lo = 0.0, hi = len;
+    for (int k = 0; k < 3; k++) {
+        double bk = c->base.v[k], ak = c->axis.v[k];
+        double tol = 1e-12 * (fabs(g->lo.v[k]) + fabs(g->hi.v[k]) + fabs(bk) + rmax + len);
+        /* lo_k(h) = bk - r0 s + (ak - sl s) h <= G.hi_k;
+         * hi_k(h) = bk + r0 s + (ak + sl s) h >= G.lo_k */
+        double alpha[2] = {ak - sl * s[k], -(ak + sl * s[k])};
+        double beta[2] = {g->hi.v[k] - bk + r0 * s[k] + tol, bk + r0 * s[k] - g->lo.v[k] + tol};
+        for (int i = 0; i < 2; i++) {
+            if (alpha[i] > 0.0)
+                hi = dmin(hi, beta[i] / alpha[i]);
+            else if (alpha[i] < 0.0)
+                lo = dmax(lo, beta[i] / alpha[i]);
+            else if (beta[i] < 0.0)
+                return 0;
+        }
+    }
+    if (!(lo <= hi))
+        return 0;
+    *h0 = lo;
+    *h1 = hi;
+    return 1;
+}
+
+/* Bounds of the cone's surface ∩ G. The surface between the axis parameters
+ * h0 and h1 lies in the convex hull of its two circles there, so the part in
+ * G lies in the box of the circles at the ends of cone_axis_range — for a
+ * cone not parallel to a coordinate axis far tighter than its bounds ∩ G.
+ * A cone along a coordinate axis has circular cross-sections in the other
+ * two: their radii between h0 and h1 lie in [rlo, rhi], and, as for the
+ * sphere, the circles miss the rectangle of G when it lies outside the disc
+ * of radius rhi or inside that of radius rlo; on each cross axis the part
+ * reaches at most sqrt(rhi^2 - gap^2) from the axis, gap being G's distance
+ * from the axis on the other. */
+static int clip_cone(const cone_shape *c, const bsp_box *g, bsp_box *b)
+{
+    double s[3]; /* a unit disc's half-width on each axis: sqrt(1 - a_k^2) */
+    for (int k = 0; k < 3; k++) {
+        double ai = c->axis.v[(k + 1) % 3], aj = c->axis.v[(k + 2) % 3];
+        s[k] = dmin(sqrt(ai * ai + aj * aj), 1.0);
+    }
+    double h[2];
+    if (!cone_axis_range(c, g, s, &h[0], &h[1]))
+        return 0;
+    double r[2];
+    *b = box_empty();
+    for (int e = 0; e < 2; e++) {
+        r[e] = dmax(c->base_radius + c->slope * h[e], 0.0);
+        for (int k = 0; k < 3; k++) {
+            double ck = c->base.v[k] + c->axis.v[k] * h[e], w = r[e] * s[k];
+            b->lo.v[k] = dmin(b->lo.v[k], ck - w);
+            b->hi.v[k] = dmax(b->hi.v[k], ck + w);
+        }
+    }
+    int along = -1; /* the coordinate axis the cone's axis is parallel to */
+    for (int k = 0; k < 3; k++)
+        if (c->axis.v[(k + 1) % 3] == 0.0 && c->axis.v[(k + 2) % 3] == 0.0)
+            along = k;
+    if (along < 0)
+        return 1;
+    const double slack = 16.0 * DBL_EPSILON;
+    const double rlo = dmin(r[0], r[1]), rhi = dmax(r[0], r[1]);
+    const int j[2] = {(along + 1) % 3, (along + 2) % 3};
+    double gap[2], far[2];
+    for (int i = 0; i < 2; i++) {
+        double cc = c->base.v[j[i]], lo = g->lo.v[j[i]], hi = g->hi.v[j[i]];
+        gap[i] = cc < lo ? lo - cc : (cc > hi ? cc - hi : 0.0);
+        far[i] = dmax(fabs(cc - lo), fabs(hi - cc));
+    }
+    double r2 = rhi * rhi;
+    if (gap[0] * gap[0] + gap[1] * gap[1] > r2 * (1.0 + slack))
+        return 0; /* outside the largest circle */
+    if (far[0] * far[0] + far[1] * far[1] < rlo * rlo * (1.0 - slack))
+        return 0; /* inside the smallest circle */
+    for (int i = 0; i < 2; i++) {
+        double go = gap[1 - i] * gap[1 - i];
+        double ext = dmin(sqrt(dmax(r2 - go, 0.0) + slack * (r2 + go)), rhi);
+        double cc = c->base.v[j[i]];
+        b->lo.v[j[i]] = dmax(b->lo.v[j[i]], cc - ext);
+        b->hi.v[j[i]] = dmin(b->hi.v[j[i]], cc + ext);
+    }
+    return 1;
+}
+
 static int box_inside(bsp_box a, const bsp_box *g)
 {
     for (int k = 0; k < 3; k++)
@@ -298,7 +393,7 @@ int kd_clip_prim_bounded(const bsp_scene *scene, uint32_t prim, bsp_box pb, cons
             break;
         }
         case SHAPE_CONE:
-            b = pb;
+            r = clip_cone(&scene->cones[p->slot], &g, &b);
             break;
         default:
             return 0;

@@ -13,8 +13,10 @@
  *
  * Triangles and polygons are clipped exactly (Sutherland–Hodgman against the
  * planes of G that their bounds cross); a sphere uses the ball ∩ G (exact
- * per axis) and is dropped when G lies wholly inside it; a cone uses its
- * bounds ∩ G. A primitive whose bounds lie inside G gets its plain padded
+ * per axis) and is dropped when G lies wholly inside it; a cone uses the box
+ * of its part over the range of its axis where its cross-section can reach G,
+ * and, along a coordinate axis, its circles ∩ G's cross-section as for the
+ * sphere (kd_clip.c). A primitive whose bounds lie inside G gets its plain padded
  * bounds, bit for bit what kd_prim_box returns.
  */
 #ifndef BSPRAY_ACCEL_KD_CLIP_H
