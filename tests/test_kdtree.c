@@ -352,6 +352,40 @@ TEST(kd_exact_stress_primitives_in_split_planes)
     bsp_scene_destroy(s);
 }
 
+/* Cones and cylinders along the axes (the clip treats their cross-section
+ * as circles): a jungle gym of unit-spaced tubes whose surfaces touch the
+ * integer planes and each other, coaxial tubes nested inside wider ones
+ * (cells inside the outer tube but outside the inner one), axis-aligned cones
+ * narrowing to a point, and the spheres at the joints. */
+TEST(kd_exact_stress_axis_aligned_tubes)
+{
+    bsp_scene *s = bsp_scene_create();
+    bsp_error err;
+    rng = 47;
+    for (int i = 0; i <= 4; i++)
+        for (int j = 0; j <= 4; j++)
+            for (int axis = 0; axis < 3; axis++) {
+                double b[3], a[3];
+                b[axis] = 0;
+                a[axis] = 4;
+                b[(axis + 1) % 3] = a[(axis + 1) % 3] = i;
+                b[(axis + 2) % 3] = a[(axis + 2) % 3] = j;
+                bsp_vec3 bv = bsp_v3(b[0], b[1], b[2]), av = bsp_v3(a[0], a[1], a[2]);
+                double r = (i + j) % 2 ? 0.5 : 0.125; /* 0.5: touches the next tube */
+                REQUIRE(bsp_scene_add_cone(s, bv, r, av, r, &err) == BSP_OK);
+                if ((i + j) % 3 == 0) /* nested, coaxial */
+                    REQUIRE(bsp_scene_add_cone(s, bv, r * 0.5, av, r * 0.5, &err) == BSP_OK);
+                if ((i * 5 + j) % 4 == 1) /* a cone to a point, reversed */
+                    REQUIRE(bsp_scene_add_cone(s, av, 0.0, bv, r * 0.75, &err) == BSP_OK);
+            }
+    for (int i = 0; i <= 4; i++)
+        for (int j = 0; j <= 4; j++)
+            for (int k = 0; k <= 4; k += 2)
+                add_sphere(s, bsp_v3(i, j, k), rnd_in(0.1, 0.3));
+    check_scene(s, "axis-aligned tubes", quick() ? 5000 : 50000, 11);
+    bsp_scene_destroy(s);
+}
+
 TEST(kd_exact_stress_long_thin_triangles)
 {
     bsp_scene *s = bsp_scene_create();
