@@ -210,14 +210,31 @@ static int finish(bsp_box b, bsp_box pb, const bsp_box *g, double pad, bsp_box *
 
 /* Bounds of the sphere's surface ∩ G (through the ball ∩ G, exact per
  * axis); 0 when the ball misses G or G lies inside the sphere. */
+/* Relative slack of the round-shape tests below: far above their rounding. */
+#define ROUND_SLACK (16.0 * DBL_EPSILON)
+
+/* The distance from C to [LO, HI] (0 inside) and to its farther end. */
+static inline void gap_and_far(double c, double lo, double hi, double *gap, double *far)
+{
+    *gap = c < lo ? lo - c : (c > hi ? c - hi : 0.0);
+    *far = dmax(fabs(c - lo), fabs(hi - c));
+}
+
+/* How far from the centre, along one axis, a point of a circle or sphere of
+ * radius R (R2 = R^2) can lie when it is at least sqrt(D2O) from the centre
+ * across the other axes: sqrt(R2 - D2O), never below the truth. */
+static inline double reach(double r2, double r, double d2o)
+{
+    return dmin(sqrt(dmax(r2 - d2o, 0.0) + ROUND_SLACK * (r2 + d2o)), r);
+}
+
 static int clip_sphere(const sphere_shape *s, const bsp_box *g, bsp_box *b)
 {
-    const double slack = 16.0 * DBL_EPSILON;
+    const double slack = ROUND_SLACK;
     double r2 = s->radius2, gap[3], d2min = 0.0, d2max = 0.0;
     for (int k = 0; k < 3; k++) {
-        double c = s->center.v[k], lo = g->lo.v[k], hi = g->hi.v[k];
-        gap[k] = c < lo ? lo - c : (c > hi ? c - hi : 0.0);
-        double far = dmax(fabs(c - lo), fabs(hi - c));
+        double far;
+        gap_and_far(s->center.v[k], g->lo.v[k], g->hi.v[k], &gap[k], &far);
         d2min += gap[k] * gap[k];
         d2max += far * far;
     }
@@ -231,9 +248,7 @@ static int clip_sphere(const sphere_shape *s, const bsp_box *g, bsp_box *b)
         for (int j = 0; j < 3; j++)
             if (j != k)
                 d2o += gap[j] * gap[j];
-        double arg = r2 - d2o;
-        double ext = sqrt(dmax(arg, 0.0) + slack * (r2 + d2o)); /* never below the truth */
-        ext = dmin(ext, s->radius);
+        double ext = reach(r2, s->radius, d2o);
         b->lo.v[k] = dmax(c - ext, g->lo.v[k]);
         b->hi.v[k] = dmin(c + ext, g->hi.v[k]);
         if (b->lo.v[k] > b->hi.v[k]) {
@@ -315,23 +330,19 @@ static int clip_cone(const cone_shape *c, const bsp_box *g, bsp_box *b)
             along = k;
     if (along < 0)
         return 1;
-    const double slack = 16.0 * DBL_EPSILON;
+    const double slack = ROUND_SLACK;
     const double rlo = dmin(r[0], r[1]), rhi = dmax(r[0], r[1]);
     const int j[2] = {(along + 1) % 3, (along + 2) % 3};
     double gap[2], far[2];
-    for (int i = 0; i < 2; i++) {
-        double cc = c->base.v[j[i]], lo = g->lo.v[j[i]], hi = g->hi.v[j[i]];
-        gap[i] = cc < lo ? lo - cc : (cc > hi ? cc - hi : 0.0);
-        far[i] = dmax(fabs(cc - lo), fabs(hi - cc));
-    }
+    for (int i = 0; i < 2; i++)
+        gap_and_far(c->base.v[j[i]], g->lo.v[j[i]], g->hi.v[j[i]], &gap[i], &far[i]);
     double r2 = rhi * rhi;
     if (gap[0] * gap[0] + gap[1] * gap[1] > r2 * (1.0 + slack))
         return 0; /* outside the largest circle */
     if (far[0] * far[0] + far[1] * far[1] < rlo * rlo * (1.0 - slack))
         return 0; /* inside the smallest circle */
     for (int i = 0; i < 2; i++) {
-        double go = gap[1 - i] * gap[1 - i];
-        double ext = dmin(sqrt(dmax(r2 - go, 0.0) + slack * (r2 + go)), rhi);
+        double ext = reach(r2, rhi, gap[1 - i] * gap[1 - i]);
         double cc = c->base.v[j[i]];
         b->lo.v[j[i]] = dmax(b->lo.v[j[i]], cc - ext);
         b->hi.v[j[i]] = dmin(b->hi.v[j[i]], cc + ext);
