@@ -306,24 +306,17 @@ static int cone_axis_range(const cone_shape *c, const bsp_box *g, const double s
  * from the axis on the other. */
 static int clip_cone(const cone_shape *c, const bsp_box *g, bsp_box *b)
 {
-    double s[3]; /* a unit disc's half-width on each axis: sqrt(1 - a_k^2) */
-    for (int k = 0; k < 3; k++) {
-        double ai = c->axis.v[(k + 1) % 3], aj = c->axis.v[(k + 2) % 3];
-        s[k] = dmin(sqrt(ai * ai + aj * aj), 1.0);
-    }
+    /* a unit circle's half-width on each axis, sqrt(1 - a_k^2) */
+    const bsp_box unit = cone_disc_bounds(bsp_v3(0.0, 0.0, 0.0), 1.0, c->axis);
+    const double *s = unit.hi.v;
     double h[2];
     if (!cone_axis_range(c, g, s, &h[0], &h[1]))
         return 0;
     double r[2];
-    *b = box_empty();
-    for (int e = 0; e < 2; e++) {
+    for (int e = 0; e < 2; e++)
         r[e] = dmax(c->base_radius + c->slope * h[e], 0.0);
-        for (int k = 0; k < 3; k++) {
-            double ck = c->base.v[k] + c->axis.v[k] * h[e], w = r[e] * s[k];
-            b->lo.v[k] = dmin(b->lo.v[k], ck - w);
-            b->hi.v[k] = dmax(b->hi.v[k], ck + w);
-        }
-    }
+    *b = box_union(cone_disc_bounds(v3_madd(c->base, c->axis, h[0]), r[0], c->axis),
+                   cone_disc_bounds(v3_madd(c->base, c->axis, h[1]), r[1], c->axis));
     int along = -1; /* the coordinate axis the cone's axis is parallel to */
     for (int k = 0; k < 3; k++)
         if (c->axis.v[(k + 1) % 3] == 0.0 && c->axis.v[(k + 2) % 3] == 0.0)

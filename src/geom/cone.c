@@ -40,8 +40,7 @@ int cone_setup(cone_shape *c, bsp_vec3 base, double base_radius, bsp_vec3 apex,
     return 1;
 }
 
-/* The box of the disc of radius R centred at CENTER with unit normal A. */
-static bsp_box disc_bounds(bsp_vec3 center, double r, bsp_vec3 a)
+bsp_box cone_disc_bounds(bsp_vec3 center, double r, bsp_vec3 a)
 {
     bsp_box b;
     for (int k = 0; k < 3; k++) {
@@ -57,8 +56,8 @@ static bsp_box disc_bounds(bsp_vec3 center, double r, bsp_vec3 a)
 bsp_box cone_bounds(const cone_shape *c)
 {
     bsp_vec3 apex = v3_madd(c->base, c->axis, c->length);
-    return box_union(disc_bounds(c->base, c->base_radius, c->axis),
-                     disc_bounds(apex, c->apex_radius, c->axis));
+    return box_union(cone_disc_bounds(c->base, c->base_radius, c->axis),
+                     cone_disc_bounds(apex, c->apex_radius, c->axis));
 }
 
 int cone_intersect(const cone_shape *c, const bsp_ray *ray, double *t)

@@ -84,6 +84,10 @@ SHAPES_HIDDEN bsp_box sphere_bounds(const sphere_shape *s);
 SHAPES_HIDDEN bsp_box triangle_bounds(const triangle_shape *tr);
 SHAPES_HIDDEN bsp_box polygon_bounds(const polygon_shape *p, const bsp_vec3 *verts);
 SHAPES_HIDDEN bsp_box cone_bounds(const cone_shape *c);
+/* The box of the circle of radius R centred at CENTER in the plane with unit
+ * normal A (a cross-section of a cone; cone_bounds is the union of its two
+ * end circles'). */
+SHAPES_HIDDEN bsp_box cone_disc_bounds(bsp_vec3 center, double r, bsp_vec3 a);
 
 /* --- intersection --------------------------------------------------------- */
 
