@@ -15,6 +15,8 @@
  *   through the pluggable measure with a non-inlined area function);
  * - clipping is conservative (sampled points of the primitive inside the box
  *   lie inside the clipped bounds) and tight;
+ * - the one-pass sweep of small nodes finds the very plane and cost of the
+ *   sweep of runs, on random event lists;
  * - two builds give identical node arrays; calibration gives sane figures;
  * - a scaling report of build time per primitive at ~1e4, 1e5, 1e6.
  *
@@ -29,6 +31,7 @@
 
 #include "accel/kd_clip.h"
 #include "accel/kd_cost.h"
+#include "accel/kd_sah.h"
 #include "accel/kd_tree.h"
 #include "bspray/bspray.h"
 #include "geom/vec.h"
@@ -1402,4 +1405,107 @@ TEST(sah_split_to_limits_ends_only_at_the_limits)
         }
     }
     bsp_scene_destroy(s);
+}
+
+static int cmp_event(const void *x, const void *y)
+{
+    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+    return (a > b) - (a < b);
+}
+
+/* kd_sweep_linear sweeps a node of fewer than 128 primitives in one pass;
+ * the sweep of runs (kd_sweep_linear_runs) is the reference. On random
+ * nodes — events inside, at and beyond the cell's bounds, positions shared
+ * on a grid, uniform, class and per-primitive costs, mailbox on and off,
+ * with and without the empty bonus — both must give the same plane and the
+ * same cost, bit for bit. */
+TEST(sah_small_sweep_matches_the_sweep_of_runs)
+{
+    enum { MAXN = 127 };
+    static uint64_t ev[3 * 2 * MAXN];
+    static double cost[MAXN];
+    rng_state = 777;
+    int nodes = quick() ? 3000 : 30000, mismatches = 0, found = 0, bonus_wins = 0;
+    char first[256] = "";
+    for (int it = 0; it < nodes; it++) {
+        bsp_box cell;
+        for (unsigned k = 0; k < 3; k++) {
+            cell.lo.v[k] = (float)rnd_in(-10, 10); /* planes are floats */
+            cell.hi.v[k] = (float)(cell.lo.v[k] + pow(10.0, rnd_in(-3, 1)));
+        }
+        size_t n = 1 + (size_t)(rnd() * (rnd() < 0.2 ? MAXN : 24));
+        int inside = rnd() < 0.4; /* no event beyond the cell: the bonus cases */
+        int spans = rnd() < 0.1 ? (int)(rnd() * 3) : -1; /* every box spans this axis */
+        double grid = rnd() < 0.3 ? 0.05 : 0.0;
+        sah_build b;
+        memset(&b, 0, sizeof b);
+        b.ctrav = 1.0;
+        b.bonus_mul = rnd() < 0.7 ? 0.9 : 1.0;
+        b.mailbox = rnd() < 0.7;
+        b.mb_hit = 0.15;
+        int mode = (int)(rnd() * 3);
+        b.cost_mode = mode == 0 ? COST_UNIFORM : mode == 1 ? COST_CLASS : COST_ARRAY;
+        b.unif = 1.25;
+        for (int c = 0; c < 8; c++)
+            b.class_cost[c] = 0.25 * (double)(1 + c);
+        b.cost = cost;
+        double tsum = 0.0;
+        for (size_t p = 0; p < n; p++) {
+            unsigned cls = (unsigned)(rnd() * 8);
+            cost[p] = b.cost_mode == COST_CLASS ? b.class_cost[cls]
+                                                : 0.25 * (double)(1 + (int)(rnd() * 16));
+            tsum += b.cost_mode == COST_UNIFORM ? b.unif : cost[p]; /* exact sums */
+            uint64_t cbits = b.cost_mode == COST_CLASS ? (uint64_t)cls << EV_CLASS_SHIFT : 0;
+            for (unsigned k = 0; k < 3; k++) {
+                double lo = cell.lo.v[k], w = cell.hi.v[k] - lo;
+                double a = inside ? rnd_in(0.0, 0.9) : rnd_in(-0.2, 1.1);
+                double d = w * (inside ? rnd_in(0.001, 1.0 - a) : rnd_in(0.001, 0.4));
+                if (grid > 0.0)
+                    a = floor(a / grid) * grid;
+                float f0 = (float)(lo + a * w), f1 = (float)(lo + a * w + d);
+                if (inside && !((double)f0 > lo))
+                    f0 = nextafterf((float)lo, INFINITY);
+                if (!(f1 > f0))
+                    f1 = nextafterf(f0, INFINITY);
+                double u = rnd(); /* exactly on a bound of the cell */
+                if (u < 0.1 && (float)lo < f1)
+                    f0 = (float)lo;
+                else if (u < 0.2 && (float)cell.hi.v[k] > f0)
+                    f1 = (float)cell.hi.v[k];
+                if ((int)k == spans) {
+                    f0 = (float)lo;
+                    f1 = (float)cell.hi.v[k];
+                }
+                ev[k * 2 * n + 2 * p] = make_event(f0 == 0.0f ? 0.0f : f0, 1, (uint32_t)p) | cbits;
+                ev[k * 2 * n + 2 * p + 1] =
+                    make_event(f1 == 0.0f ? 0.0f : f1, 0, (uint32_t)p) | cbits;
+            }
+        }
+        for (unsigned k = 0; k < 3; k++)
+            qsort(ev + k * 2 * n, 2 * n, sizeof *ev, cmp_event);
+        double inv_area = 2.0 / kd_surface_area(&cell);
+        split_choice one = {INFINITY, 0, 0.0f, 0}, runs = {INFINITY, 0, 0.0f, 0};
+        kd_sweep_linear(&b, ev, 2 * n, n, tsum, &cell, inv_area, &one);
+        kd_sweep_linear_runs(&b, ev, 2 * n, n, tsum, &cell, inv_area, &runs);
+        free(b.chunks);
+        found += runs.found;
+        /* a plane at the first START or the last END of an axis: the bonus */
+        if (runs.found) {
+            const uint64_t *e = ev + runs.axis * 2 * n;
+            bonus_wins += runs.pos == key_float((uint32_t)(e[0] >> 32)) ||
+                          runs.pos == key_float((uint32_t)(e[2 * n - 1] >> 32));
+        }
+        int same = one.found == runs.found &&
+                   (!runs.found || (one.axis == runs.axis && one.pos == runs.pos &&
+                                    memcmp(&one.cost, &runs.cost, sizeof one.cost) == 0));
+        if (!same && mismatches++ == 0)
+            snprintf(first, sizeof first,
+                     "node %d (n %zu, mode %d, mailbox %d): one pass axis %u pos %.9g cost "
+                     "%.17g, runs axis %u pos %.9g cost %.17g",
+                     it, n, mode, b.mailbox, one.axis, (double)one.pos, one.cost, runs.axis,
+                     (double)runs.pos, runs.cost);
+    }
+    CHECK_MSG(mismatches == 0, "%d of %d nodes differ; first: %s", mismatches, nodes, first);
+    CHECK(found > nodes / 2);
+    CHECK_MSG(bonus_wins > nodes / 50, "only %d planes at an end of the lists", bonus_wins);
 }
