@@ -1413,7 +1413,7 @@ static int cmp_event(const void *x, const void *y)
     return (a > b) - (a < b);
 }
 
-/* kd_sweep_linear sweeps a node of fewer than 128 primitives in one pass;
+/* kd_sweep_linear sweeps a node of fewer than 16 primitives in one pass;
  * the sweep of runs (kd_sweep_linear_runs) is the reference. On random
  * nodes — events inside, at and beyond the cell's bounds, positions shared
  * on a grid, uniform, class and per-primitive costs, mailbox on and off,
@@ -1421,7 +1421,7 @@ static int cmp_event(const void *x, const void *y)
  * same cost, bit for bit. */
 TEST(sah_small_sweep_matches_the_sweep_of_runs)
 {
-    enum { MAXN = 127 };
+    enum { MAXN = 15 };
     static uint64_t ev[3 * 2 * MAXN];
     static double cost[MAXN];
     rng_state = 777;
@@ -1433,7 +1433,7 @@ TEST(sah_small_sweep_matches_the_sweep_of_runs)
             cell.lo.v[k] = (float)rnd_in(-10, 10); /* planes are floats */
             cell.hi.v[k] = (float)(cell.lo.v[k] + pow(10.0, rnd_in(-3, 1)));
         }
-        size_t n = 1 + (size_t)(rnd() * (rnd() < 0.2 ? MAXN : 24));
+        size_t n = 1 + (size_t)(rnd() * 15);
         int inside = rnd() < 0.4; /* no event beyond the cell: the bonus cases */
         int spans = rnd() < 0.1 ? (int)(rnd() * 3) : -1; /* every box spans this axis */
         double grid = rnd() < 0.3 ? 0.05 : 0.0;

@@ -250,8 +250,8 @@ HIDDEN void kd_sweep_linear(sah_build *b, const uint64_t *ev, size_t stride, siz
                             double tsum, const bsp_box *cell, double inv_area,
                             split_choice *best);
 
-/* The same by the sweep of runs at any size (kd_sweep_linear uses a one-pass
- * sweep below SWEEP_PRUNE_MIN events per axis; the tests compare the two). */
+/* The same by the sweep of runs at any size (kd_sweep_linear sweeps nodes of
+ * fewer than 16 primitives in one pass; the tests compare the two). */
 HIDDEN void kd_sweep_linear_runs(sah_build *b, const uint64_t *ev, size_t stride, size_t n,
                                  double tsum, const bsp_box *cell, double inv_area,
                                  split_choice *best);
