@@ -65,6 +65,13 @@ lin_g(const lin_axis *ax, const lin_model *lm, double p_l, double p_r, double tl
     return ax->perim * ((p_l - ax->lo) * tl + (ax->hi - p_r) * tr) + ax->cross * (w + lm->w0);
 }
 
+/* G with the empty bonus: the whole cost C_trav + scale g scaled, as g. */
+static inline __attribute__((always_inline)) double lin_bonus(const lin_model *lm, double g)
+{
+    const double c = (lm->ctrav + lm->scale * g) * lm->bonus;
+    return (c - lm->ctrav) / lm->scale;
+}
+
 /* One event X (at P) of a sweep from state (TL, TR, MC): an END leaves the
  * right side before its candidate, a START joins the left side after it;
  * returns the g of the candidate. */
@@ -135,10 +142,8 @@ lin_single(const sah_build *b, const lin_axis *ax, const lin_model *lm, size_t i
         st->tl += t;
         st->mc += 1.0;
     }
-    if (nl == 0 || nr == 0) {
-        double c = (lm->ctrav + lm->scale * g) * lm->bonus;
-        g = (c - lm->ctrav) / lm->scale;
-    }
+    if (nl == 0 || nr == 0)
+        g = lin_bonus(lm, g);
     return g;
 }
 
@@ -317,10 +322,10 @@ lin_node(sah_build *b, const uint64_t *ev, size_t stride, size_t n, double tsum,
 
 /*
  * The same sweep for a small node (fewer than SWEEP_ONE_PASS_N primitives:
- * no axis has runs to prune), in one pass per axis: the events at or below the cell's
- * low end only move the state, every event strictly inside the cell is a
- * candidate in list order, and the sweep stops at the first event at or
- * above its high end. The empty bonus goes to the first candidate when no
+ * no axis has runs to prune), in one pass per axis: the events at or below
+ * the cell's low end only move the state, every event strictly inside the
+ * cell is a candidate in list order, and the sweep stops at the first event
+ * at or above its high end. The empty bonus goes to the first candidate when no
  * START lies at or below the low end and to the last event when it is a
  * candidate, as in lin_node; the states are the same exact sums and the
  * candidates are compared in the same order (strictly less), so it finds
@@ -367,8 +372,7 @@ lin_node_small(const sah_build *b, const uint64_t *ev, size_t stride, size_t n, 
             double g = lin_step(b, x, p, lo, hi, perim, cross, mbw, w0, &tl, &tr, &mc, mode,
                                 mailbox);
             if (bonus_next | (i == m - 1)) { /* a side is empty */
-                const double c = (lm->ctrav + lm->scale * g) * lm->bonus;
-                g = (c - lm->ctrav) / lm->scale;
+                g = lin_bonus(lm, g);
                 bonus_next = 0;
             }
             if (g < bg) {
