@@ -146,24 +146,29 @@ int cmd_ab(int argc, char **argv)
     int failed = bsp_render(A, &ro, &img, NULL, &err) != BSP_OK;
     for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++)
         failed |= sets[c].failed;
+    bsp_query *qa = NULL, *qb = NULL;
+    double *ratio = NULL;
+    size_t differ = 0;
+    int status = EXIT_INPUT;
     if (failed) {
         fprintf(stderr, "%s: %s: %s\n", prog, scene_path, img ? "out of memory" : err.message);
-        return EXIT_INPUT;
+        goto done;
     }
     bsp_image_destroy(img);
+    img = NULL;
     const int nclasses = all ? BSP_RAY_CLASS_COUNT : 1; /* BSP_RAY_PRIMARY is 0 */
     size_t nrays = 0;
     for (int c = 0; c < nclasses; c++)
         nrays += sets[c].n;
 
-    bsp_query *qa = bsp_query_create(A), *qb = bsp_query_create(B);
-    double *ratio = malloc((size_t)rounds * sizeof *ratio);
+    qa = bsp_query_create(A);
+    qb = bsp_query_create(B);
+    ratio = malloc((size_t)rounds * sizeof *ratio);
     if (!qa || !qb || !ratio) {
         fprintf(stderr, "%s: out of memory\n", prog);
-        return EXIT_INPUT;
+        goto done;
     }
     /* the answers, and the per-ray counters of one untimed pass */
-    size_t differ = 0;
     for (int c = 0; c < nclasses; c++) {
         for (size_t i = 0; i < sets[c].n; i++) {
             const bsp_ray *r = &sets[c].rays[i];
@@ -217,6 +222,9 @@ int cmd_ab(int argc, char **argv)
     if (differ)
         fprintf(stderr, "%s: %s: %zu of %zu rays got different answers from A and B\n", prog,
                 scene_path, differ, nrays);
+    status = differ ? EXIT_INPUT : 0;
+done:
+    bsp_image_destroy(img);
     free(ratio);
     bench_free_ray_sets(sets);
     bsp_query_destroy(qa);
@@ -224,5 +232,5 @@ int cmd_ab(int argc, char **argv)
     bsp_accel_destroy(A);
     bsp_accel_destroy(B);
     bsp_scene_destroy(scene);
-    return differ ? EXIT_INPUT : 0;
+    return status;
 }

@@ -208,8 +208,6 @@ static int finish(bsp_box b, bsp_box pb, const bsp_box *g, double pad, bsp_box *
     return 1;
 }
 
-/* Bounds of the sphere's surface ∩ G (through the ball ∩ G, exact per
- * axis); 0 when the ball misses G or G lies inside the sphere. */
 /* Relative slack of the round-shape tests below: far above their rounding. */
 #define ROUND_SLACK (16.0 * DBL_EPSILON)
 
@@ -228,9 +226,10 @@ static inline double reach(double r2, double r, double d2o)
     return dmin(sqrt(dmax(r2 - d2o, 0.0) + ROUND_SLACK * (r2 + d2o)), r);
 }
 
+/* Bounds of the sphere's surface ∩ G (through the ball ∩ G, exact per
+ * axis); 0 when the ball misses G or G lies inside the sphere. */
 static int clip_sphere(const sphere_shape *s, const bsp_box *g, bsp_box *b)
 {
-    const double slack = ROUND_SLACK;
     double r2 = s->radius2, gap[3], d2min = 0.0, d2max = 0.0;
     for (int k = 0; k < 3; k++) {
         double far;
@@ -238,9 +237,9 @@ static int clip_sphere(const sphere_shape *s, const bsp_box *g, bsp_box *b)
         d2min += gap[k] * gap[k];
         d2max += far * far;
     }
-    if (d2min > r2 * (1.0 + slack))
+    if (d2min > r2 * (1.0 + ROUND_SLACK))
         return 0; /* the ball misses G */
-    if (d2max < r2 * (1.0 - slack))
+    if (d2max < r2 * (1.0 - ROUND_SLACK))
         return 0; /* G lies inside the ball: the surface misses it */
     for (int k = 0; k < 3; k++) {
         double c = s->center.v[k];
@@ -323,16 +322,15 @@ static int clip_cone(const cone_shape *c, const bsp_box *g, bsp_box *b)
             along = k;
     if (along < 0)
         return 1;
-    const double slack = ROUND_SLACK;
     const double rlo = dmin(r[0], r[1]), rhi = dmax(r[0], r[1]);
     const int j[2] = {(along + 1) % 3, (along + 2) % 3};
     double gap[2], far[2];
     for (int i = 0; i < 2; i++)
         gap_and_far(c->base.v[j[i]], g->lo.v[j[i]], g->hi.v[j[i]], &gap[i], &far[i]);
     double r2 = rhi * rhi;
-    if (gap[0] * gap[0] + gap[1] * gap[1] > r2 * (1.0 + slack))
+    if (gap[0] * gap[0] + gap[1] * gap[1] > r2 * (1.0 + ROUND_SLACK))
         return 0; /* outside the largest circle */
-    if (far[0] * far[0] + far[1] * far[1] < rlo * rlo * (1.0 - slack))
+    if (far[0] * far[0] + far[1] * far[1] < rlo * rlo * (1.0 - ROUND_SLACK))
         return 0; /* inside the smallest circle */
     for (int i = 0; i < 2; i++) {
         double ext = reach(r2, rhi, gap[1 - i] * gap[1 - i]);
