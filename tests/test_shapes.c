@@ -543,32 +543,32 @@ TEST(polygon_plain_hit_and_miss)
     REQUIRE(polygon_setup(&p, square_verts, 0, 4, SHAPE_NO_NORMALS));
     double t = -1;
     bsp_ray r = ray0(0.5, 1.5, 4, 0, 0, -1);
-    CHECK(polygon_intersect(&p, square_verts, &r, &t));
+    CHECK(polygon_intersect(&p, square_verts, NULL, &r, &t));
     CHECK(t == 4.0);
     r = ray0(0.5, 1.5, -4, 0, 0, 2); /* from below, |dir| = 2 */
-    CHECK(polygon_intersect(&p, square_verts, &r, &t));
+    CHECK(polygon_intersect(&p, square_verts, NULL, &r, &t));
     CHECK(t == 2.0);
     r = ray0(2.5, 1.5, 4, 0, 0, -1);
-    CHECK_EQ_INT(polygon_intersect(&p, square_verts, &r, &t), 0);
+    CHECK_EQ_INT(polygon_intersect(&p, square_verts, NULL, &r, &t), 0);
     r = ray0(0.5, 1.5, 4, 0, 0, 1);
-    CHECK_EQ_INT(polygon_intersect(&p, square_verts, &r, &t), 0);
+    CHECK_EQ_INT(polygon_intersect(&p, square_verts, NULL, &r, &t), 0);
     /* oblique with one zero component: from (-1,1,2) along (1,0,-1): (1,1,0), t = 2 */
     r = ray0(-1, 1, 2, 1, 0, -1);
-    CHECK(polygon_intersect(&p, square_verts, &r, &t));
+    CHECK(polygon_intersect(&p, square_verts, NULL, &r, &t));
     CHECK(t == 2.0);
     /* oblique, unnormalised (3,0,-1.5) from (-1.5,1,1): hit (0.5,1,0) at t = 2/3 */
     r = ray0(-1.5, 1, 1, 3, 0, -1.5);
-    CHECK(polygon_intersect(&p, square_verts, &r, &t));
+    CHECK(polygon_intersect(&p, square_verts, NULL, &r, &t));
     CHECK_NEAR(t, 2.0 / 3.0, EPS);
     /* tilted square x + z = 2, y in [0,1]: from (0,0.5,0.5) along +x the
      * plane is met at x = 1.5, t = 1.5; at y = 1.5 the point is outside */
     bsp_vec3 tv[4] = {bsp_v3(2, 0, 0), bsp_v3(2, 1, 0), bsp_v3(1, 1, 1), bsp_v3(1, 0, 1)};
     REQUIRE(polygon_setup(&p, tv, 0, 4, SHAPE_NO_NORMALS));
     r = ray0(0, 0.5, 0.5, 1, 0, 0);
-    CHECK(polygon_intersect(&p, tv, &r, &t));
+    CHECK(polygon_intersect(&p, tv, NULL, &r, &t));
     CHECK_NEAR(t, 1.5, EPS);
     r = ray0(0, 1.5, 0.5, 1, 0, 0);
-    CHECK_EQ_INT(polygon_intersect(&p, tv, &r, &t), 0);
+    CHECK_EQ_INT(polygon_intersect(&p, tv, NULL, &r, &t), 0);
 }
 
 TEST(polygon_parallel_rays_miss)
@@ -577,13 +577,13 @@ TEST(polygon_parallel_rays_miss)
     REQUIRE(polygon_setup(&p, square_verts, 0, 4, SHAPE_NO_NORMALS));
     double t = -1;
     bsp_ray r = ray0(-1, 1, 1, 1, 0, 0); /* above the plane */
-    CHECK_EQ_INT(polygon_intersect(&p, square_verts, &r, &t), 0);
+    CHECK_EQ_INT(polygon_intersect(&p, square_verts, NULL, &r, &t), 0);
     r = ray0(-1, 1, 0, 1, 0, 0); /* lying in the plane, crossing the square */
-    CHECK_EQ_INT(polygon_intersect(&p, square_verts, &r, &t), 0);
+    CHECK_EQ_INT(polygon_intersect(&p, square_verts, NULL, &r, &t), 0);
     r = ray0(1, 1, 0, 1, 1, 0); /* in the plane, starting inside */
-    CHECK_EQ_INT(polygon_intersect(&p, square_verts, &r, &t), 0);
+    CHECK_EQ_INT(polygon_intersect(&p, square_verts, NULL, &r, &t), 0);
     r = ray0(1, 1, 0, 0, 0, 0); /* zero direction */
-    CHECK_EQ_INT(polygon_intersect(&p, square_verts, &r, &t), 0);
+    CHECK_EQ_INT(polygon_intersect(&p, square_verts, NULL, &r, &t), 0);
     CHECK(t == -1);
 }
 
@@ -593,27 +593,27 @@ TEST(polygon_origin_on_surface_interval_unnormalised)
     REQUIRE(polygon_setup(&p, square_verts, 0, 4, SHAPE_NO_NORMALS));
     double t = -1, t2 = -1;
     bsp_ray r = ray0(1, 1, 0, 0.3, 0.1, 1);
-    CHECK(polygon_intersect(&p, square_verts, &r, &t));
+    CHECK(polygon_intersect(&p, square_verts, NULL, &r, &t));
     CHECK(t == 0.0);
     r.tmin = 1e-9;
-    CHECK_EQ_INT(polygon_intersect(&p, square_verts, &r, &t), 0);
+    CHECK_EQ_INT(polygon_intersect(&p, square_verts, NULL, &r, &t), 0);
 
     r = ray0(0.3, 0.7, 3.3, 0.11, 0.13, -1.7);
-    REQUIRE(polygon_intersect(&p, square_verts, &r, &t));
+    REQUIRE(polygon_intersect(&p, square_verts, NULL, &r, &t));
     r.tmax = t;
-    CHECK(polygon_intersect(&p, square_verts, &r, &t2) && t2 == t);
+    CHECK(polygon_intersect(&p, square_verts, NULL, &r, &t2) && t2 == t);
     r.tmax = nextafter(t, 0);
-    CHECK_EQ_INT(polygon_intersect(&p, square_verts, &r, &t2), 0);
+    CHECK_EQ_INT(polygon_intersect(&p, square_verts, NULL, &r, &t2), 0);
     r.tmin = 0.5;
     r.tmax = 1e9;
-    CHECK(polygon_intersect(&p, square_verts, &r, &t2) && t2 == t);
+    CHECK(polygon_intersect(&p, square_verts, NULL, &r, &t2) && t2 == t);
     r = ray0(0.3, 0.7, 3.3, 0.22, 0.26, -3.4);
-    CHECK(polygon_intersect(&p, square_verts, &r, &t2));
+    CHECK(polygon_intersect(&p, square_verts, NULL, &r, &t2));
     CHECK(t2 == 0.5 * t);
     /* a hit at t = 3 is excluded by tmax = 2.5 */
     r = ray0(1, 1, 3, 0, 0, -1);
     r.tmax = 2.5;
-    CHECK_EQ_INT(polygon_intersect(&p, square_verts, &r, &t2), 0);
+    CHECK_EQ_INT(polygon_intersect(&p, square_verts, NULL, &r, &t2), 0);
 }
 
 /* The fan triangle (v0, v1, v2) of the L-shape covers the concavity point. */
@@ -627,13 +627,13 @@ TEST(polygon_concave_l_shape)
     const double in[][2] = {{0.5, 0.5}, {1.5, 0.5}, {0.5, 1.5}, {1.25, 0.75}, {0.75, 1.25}};
     for (size_t i = 0; i < sizeof in / sizeof in[0]; i++) {
         bsp_ray r = ray0(in[i][0], in[i][1], 3, 0, 0, -1);
-        CHECK_MSG(polygon_intersect(&p, v, &r, &t) && t == 2.0, "L inside point %zu", i);
+        CHECK_MSG(polygon_intersect(&p, v, NULL, &r, &t) && t == 2.0, "L inside point %zu", i);
     }
     /* in the concavity and outside the hull */
     const double out[][2] = {{1.25, 1.25}, {1.5, 1.5}, {1.9, 1.1}, {-0.5, 1}, {2.5, 0.5}};
     for (size_t i = 0; i < sizeof out / sizeof out[0]; i++) {
         bsp_ray r = ray0(out[i][0], out[i][1], 3, 0, 0, -1);
-        CHECK_MSG(!polygon_intersect(&p, v, &r, &t), "L outside point %zu", i);
+        CHECK_MSG(!polygon_intersect(&p, v, NULL, &r, &t), "L outside point %zu", i);
     }
     /* a fan from vertex 0, (2,1) (1,1) (1,2), claims (1.25, 1.25): a fan
      * triangulation would report a hit where the polygon has none */
@@ -642,7 +642,7 @@ TEST(polygon_concave_l_shape)
     double u, w;
     bsp_ray r = ray0(1.25, 1.25, 3, 0, 0, -1);
     CHECK(triangle_intersect(&fan, &r, &t, &u, &w));
-    CHECK_EQ_INT(polygon_intersect(&p, v, &r, &t), 0);
+    CHECK_EQ_INT(polygon_intersect(&p, v, NULL, &r, &t), 0);
 }
 
 /* A 24-vertex star (a gear-like concave face), tips at radius 2, notches at
@@ -663,12 +663,12 @@ TEST(polygon_concave_star)
         double ang = pi * i / TEETH;
         bsp_ray r = ray0(1.5 * cos(ang), 3, 1.5 * sin(ang), 0, -1, 0);
         double t = -1;
-        int hit = polygon_intersect(&p, v, &r, &t);
+        int hit = polygon_intersect(&p, v, NULL, &r, &t);
         CHECK_MSG(hit == (i % 2 == 0), "star direction %d: hit %d", i, hit);
         if (hit)
             CHECK(t == 2.5);
         r.org = bsp_v3(0.5 * cos(ang), 3, 0.5 * sin(ang)); /* the hub */
-        CHECK(polygon_intersect(&p, v, &r, &t));
+        CHECK(polygon_intersect(&p, v, NULL, &r, &t));
     }
 }
 
@@ -685,7 +685,8 @@ TEST(polygon_shared_edge_counted_once)
     for (size_t i = 0; i < sizeof ys / sizeof ys[0]; i++) {
         bsp_ray r = ray0(1, ys[i], 1, 0, 0, -1);
         double t;
-        int ha = polygon_intersect(&a, v, &r, &t), hb = polygon_intersect(&b, v, &r, &t);
+        int ha = polygon_intersect(&a, v, NULL, &r, &t);
+        int hb = polygon_intersect(&b, v, NULL, &r, &t);
         CHECK_MSG(ha + hb == 1, "y = %g: %d + %d", ys[i], ha, hb);
     }
     /* a slanted shared edge from (0,0) to (1,3) between two quads */
@@ -697,7 +698,8 @@ TEST(polygon_shared_edge_counted_once)
         double y = 0.1 * i, x = y / 3.0;
         bsp_ray r = ray0(x, y, 1, 0, 0, -1);
         double t;
-        int ha = polygon_intersect(&a, s, &r, &t), hb = polygon_intersect(&b, s, &r, &t);
+        int ha = polygon_intersect(&a, s, NULL, &r, &t);
+        int hb = polygon_intersect(&b, s, NULL, &r, &t);
         CHECK_MSG(ha + hb == 1, "slanted y = %g: %d + %d", y, ha, hb);
     }
 }
@@ -714,7 +716,7 @@ TEST(polygon_edge_rule)
     } cases[] = {{0, 1, 1}, {1, 0, 1}, {2, 1, 0}, {1, 2, 0}, {0, 0, 1}, {2, 2, 0}};
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         bsp_ray r = ray0(cases[i].x, cases[i].y, 1, 0, 0, -1);
-        CHECK_MSG(polygon_intersect(&p, square_verts, &r, &t) == cases[i].hit,
+        CHECK_MSG(polygon_intersect(&p, square_verts, NULL, &r, &t) == cases[i].hit,
                   "edge point (%g, %g)", cases[i].x, cases[i].y);
     }
 }
@@ -761,7 +763,7 @@ TEST(polygon_crossing_rule_matches_exact_reference)
                 }
                 bsp_ray r = ray0(qx / 4.0, qy / 4.0, 1, 0, 0, -1);
                 double t = -1;
-                int hit = polygon_intersect(&p, v, &r, &t);
+                int hit = polygon_intersect(&p, v, NULL, &r, &t);
                 CHECK_MSG(hit == inside, "polygon %d point (%g, %g): kernel %d, exact %d", poly,
                           qx / 4.0, qy / 4.0, hit, inside);
                 if (hit)
@@ -802,8 +804,8 @@ TEST(polygon_crossing_rule_matches_exact_reference)
                 }
                 bsp_ray r = ray0(probes[k], py, 1, 0, 0, -1);
                 double t;
-                CHECK_MSG(polygon_intersect(&p, v, &r, &t) == inside, "polygon %d edge %d probe %d",
-                          poly, e, k);
+                CHECK_MSG(polygon_intersect(&p, v, NULL, &r, &t) == inside,
+                          "polygon %d edge %d probe %d", poly, e, k);
                 near_edges++;
             }
         }

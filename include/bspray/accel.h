@@ -53,7 +53,8 @@ typedef struct bsp_sah_costs {
     double sphere;         /* one ray-sphere test */
     double triangle;       /* one ray-triangle test (also 3-vertex polygons, patches) */
     double polygon_base;   /* a polygon with n >= 4 vertices costs */
-    double polygon_vertex; /*   polygon_base + polygon_vertex * n */
+    double polygon_vertex; /*   polygon_base + polygon_vertex * n (n >= 9: n is the
+                                edges its test visits, fewer: docs/kdtree.md) */
     double cone;           /* one ray-cone (cylinder) test */
 } bsp_sah_costs;
 

@@ -104,7 +104,9 @@ double kd_prim_cost(const bsp_scene *scene, uint32_t prim, const bsp_sah_costs *
     case SHAPE_TRIANGLE:
         return c->triangle;
     case SHAPE_POLYGON:
-        return c->polygon_base + c->polygon_vertex * (double)scene->polygons[p->slot].count;
+        return c->polygon_base +
+               c->polygon_vertex *
+                   (double)polygon_test_units(&scene->polygons[p->slot], &scene->slabs);
     case SHAPE_CONE:
         return c->cone;
     case SHAPE_NONE:
@@ -168,7 +170,7 @@ static size_t cal_pass(const cal_set *cs, const bsp_ray *rays)
             break;
         case SHAPE_POLYGON:
             for (size_t i = 0; i < cs->n; i++)
-                hits += (size_t)polygon_intersect(&cs->polygons[i], cs->verts, ray, &t);
+                hits += (size_t)polygon_intersect(&cs->polygons[i], cs->verts, NULL, ray, &t);
             break;
         case SHAPE_CONE:
             for (size_t i = 0; i < cs->n; i++)

@@ -157,8 +157,51 @@ polygon_contains_2d(const bsp_vec3 *vs, uint32_t count, int au, int av, double p
     return inside;
 }
 
-ISECT_INLINE int polygon_isect(const polygon_shape *p, const bsp_vec3 *verts, const isect_ray *ray,
-                               double tmax, double *t)
+/* The last index j < HI with Y[j] <= V, for the ascending Y[0..HI] with
+ * Y[0] <= V (V < Y[HI] when HI is past the end: the slab of V). */
+static inline uint32_t polygon_slab_of(const double *y, uint32_t hi, double v)
+{
+    uint32_t lo = 0; /* y[lo] <= v, and v < y[hi] or hi is the end */
+    while (hi - lo > 1) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (y[mid] <= v)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* The same answer as polygon_contains_2d, bit for bit, from P's slabs
+ * (polygon_slabs.c): an edge crosses the line v = py exactly when one
+ * endpoint lies above py and the other at or below it, that is when its
+ * lower endpoint's v is at most y[j] and its upper one's at least y[j + 1],
+ * y[j] <= py < y[j + 1] being py's slab among the vertices' distinct v; the
+ * slab lists those edges, and each abscissa is computed from the same
+ * operands as there (the lower endpoint and the two differences). Outside
+ * every slab (or py NaN) no edge crosses: outside. Not inlined, as above. */
+static __attribute__((noinline, unused)) int
+polygon_contains_slabs(const polygon_shape *p, const polygon_slab_pool *sp, double px, double py)
+{
+    const double *y = sp->y + p->slab_first;
+    const uint32_t k = p->nslabs;
+    if (!(py >= y[0] && py < y[k - 1]))
+        return 0;
+    const uint32_t lo = polygon_slab_of(y, k - 1, py);
+    const uint32_t *off = sp->off + p->slab_first;
+    int inside = 0;
+    for (uint32_t i = off[lo]; i < off[lo + 1]; i++) {
+        const polygon_edge *e = &sp->edge[sp->entry[i]];
+        double x = e->lo_u + (py - e->lo_v) * e->du / e->dv;
+        inside ^= px < x;
+    }
+    return inside;
+}
+
+/* SLABS: the pool of P's slabs, or NULL: walk every edge (the same answer). */
+ISECT_INLINE int polygon_isect(const polygon_shape *p, const bsp_vec3 *verts,
+                               const polygon_slab_pool *slabs, const isect_ray *ray, double tmax,
+                               double *t)
 {
     double denom = v3_dot(p->normal, ray->dir);
     if (denom == 0.0)
@@ -169,7 +212,8 @@ ISECT_INLINE int polygon_isect(const polygon_shape *p, const bsp_vec3 *verts, co
     int au = p->axis_u, av = p->axis_v;
     double px = ray->org.v[au] + ray->dir.v[au] * tt;
     double py = ray->org.v[av] + ray->dir.v[av] * tt;
-    if (!polygon_contains_2d(verts + p->first, p->count, au, av, px, py))
+    if (!(slabs && p->nslabs ? polygon_contains_slabs(p, slabs, px, py)
+                             : polygon_contains_2d(verts + p->first, p->count, au, av, px, py)))
         return 0;
     *t = tt;
     return 1;

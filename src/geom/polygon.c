@@ -53,6 +53,8 @@ int polygon_setup(polygon_shape *p, const bsp_vec3 *verts, uint32_t first, uint3
     p->normals = normals;
     p->axis_u = (uint8_t)((drop + 1) % 3);
     p->axis_v = (uint8_t)((drop + 2) % 3);
+    p->slab_first = 0;
+    p->nslabs = 0;
     return 1;
 }
 
@@ -75,11 +77,12 @@ bsp_box polygon_bounds(const polygon_shape *p, const bsp_vec3 *verts)
     return box;
 }
 
-int polygon_intersect(const polygon_shape *p, const bsp_vec3 *verts, const bsp_ray *ray, double *t)
+int polygon_intersect(const polygon_shape *p, const bsp_vec3 *verts,
+                      const polygon_slab_pool *slabs, const bsp_ray *ray, double *t)
 {
     isect_ray r;
     isect_ray_init(&r, ray);
-    return polygon_isect(p, verts, &r, ray->tmax, t);
+    return polygon_isect(p, verts, slabs, &r, ray->tmax, t);
 }
 
 /* The normalised pool normal, or FALLBACK when it has no direction. */

@@ -65,6 +65,7 @@ void bsp_scene_destroy(bsp_scene *s)
     free(s->cones);
     free(s->verts);
     free(s->normals);
+    polygon_slab_pool_free(&s->slabs);
     free(s->materials);
     free(s->lights);
     for (size_t i = 0; i < s->nwarnings; i++)
@@ -218,7 +219,8 @@ static bsp_status add_polygonal(bsp_scene *s, bsp_prim_kind kind, const bsp_vec3
         return push_prim(s, kind, SHAPE_NONE, 0, err);
     }
     s->nverts += n;
-    if (!GROW(s->polygons, s->cap_polygons, s->npolygons + 1)) {
+    if (!GROW(s->polygons, s->cap_polygons, s->npolygons + 1) ||
+        !polygon_slabs_build(&pg, s->verts, &s->slabs)) {
         s->nverts = old_nverts;
         return scene_fail(s, err, BSP_ERR_NOMEM, "out of memory");
     }

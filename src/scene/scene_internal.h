@@ -70,6 +70,8 @@ struct bsp_scene {
     size_t nverts, cap_verts;
     bsp_vec3 *normals;
     size_t nnormals, cap_normals;
+    /* the slabs of the polygons with many vertices (polygon_slabs.c) */
+    polygon_slab_pool slabs;
 
     size_t kind_count[BSP_PRIM_KIND_COUNT];
 
@@ -157,7 +159,7 @@ scene_isect(const bsp_scene *s, uint32_t prim, const isect_ray *ray, double tmax
             return 0;
         break;
     case SHAPE_POLYGON:
-        if (!polygon_isect(&s->polygons[p->slot], s->verts, ray, tmax, &h->t))
+        if (!polygon_isect(&s->polygons[p->slot], s->verts, &s->slabs, ray, tmax, &h->t))
             return 0;
         break;
     case SHAPE_CONE:
