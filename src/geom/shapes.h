@@ -106,7 +106,6 @@ SHAPES_HIDDEN int triangle_setup(triangle_shape *tr, bsp_vec3 a, bsp_vec3 b, bsp
 /* VERTS is the pool; the polygon's vertices are VERTS[first .. first+count). */
 SHAPES_HIDDEN int polygon_setup(polygon_shape *p, const bsp_vec3 *verts, uint32_t first,
                                 uint32_t count, uint32_t normals);
-/* Radii may be negative (inside only); both radii must then be <= 0. */
 /* Builds the slabs of polygon P (set up; vertices VERTS[p->first ..]) into
  * POOL when it has at least POLYGON_SLAB_MIN vertices and its slabs hold at
  * most POLYGON_SLAB_BUDGET entries per vertex; otherwise P keeps none.
@@ -118,6 +117,7 @@ SHAPES_HIDDEN void polygon_slab_pool_free(polygon_slab_pool *pool);
  * vertex count when it has no slabs (POOL may then be NULL), else the steps
  * of the binary search plus the mean entries of a slab, each rounded up. */
 SHAPES_HIDDEN uint32_t polygon_test_units(const polygon_shape *p, const polygon_slab_pool *pool);
+/* Radii may be negative (inside only); both radii must then be <= 0. */
 SHAPES_HIDDEN int cone_setup(cone_shape *c, bsp_vec3 base, double base_radius, bsp_vec3 apex,
                              double apex_radius);
 
