@@ -1495,9 +1495,7 @@ TEST(sah_small_sweep_matches_the_sweep_of_runs)
             bonus_wins += runs.pos == key_float((uint32_t)(e[0] >> 32)) ||
                           runs.pos == key_float((uint32_t)(e[2 * n - 1] >> 32));
         }
-        int same = one.found == runs.found &&
-                   (!runs.found || (one.axis == runs.axis && one.pos == runs.pos &&
-                                    memcmp(&one.cost, &runs.cost, sizeof one.cost) == 0));
+        int same = split_choice_same(&one, &runs);
         if (!same && mismatches++ == 0)
             snprintf(first, sizeof first,
                      "node %d (n %zu, mode %d, mailbox %d): one pass axis %u pos %.9g cost "

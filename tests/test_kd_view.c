@@ -592,9 +592,7 @@ TEST(pruned_view_sweep_picks_the_full_sweeps_plane)
             full_sweep(&b, ev[k], 2 * n, k, &cell, 1.0 / area, tsum, n, &full);
         }
         found += full.found;
-        int same = pruned.found == full.found &&
-                   (!full.found || (pruned.axis == full.axis && pruned.pos == full.pos &&
-                                    memcmp(&pruned.cost, &full.cost, sizeof full.cost) == 0));
+        int same = split_choice_same(&pruned, &full);
         if (!same && mismatches++ == 0)
             snprintf(first, sizeof first,
                      "node %d (kind %d, n %zu): pruned axis %u pos %.9g cost %.17g, full axis "

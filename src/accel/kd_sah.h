@@ -175,6 +175,15 @@ typedef struct split_choice {
     int found;
 } split_choice;
 
+/* Whether two sweeps chose the same split: both none, or the same axis,
+ * plane and cost bit for bit (the tests compare sweeps with it). */
+static inline int split_choice_same(const split_choice *a, const split_choice *b)
+{
+    return a->found == b->found &&
+           (!a->found || (a->axis == b->axis && a->pos == b->pos &&
+                          memcmp(&a->cost, &b->cost, sizeof a->cost) == 0));
+}
+
 static inline double ev_cost(const sah_build *b, uint64_t x, int mode)
 {
     return mode == COST_UNIFORM ? b->unif
