@@ -1426,6 +1426,8 @@ TEST(sah_small_sweep_matches_the_sweep_of_runs)
     static double cost[MAXN];
     rng_state = 777;
     int nodes = quick() ? 3000 : 30000, mismatches = 0, found = 0, bonus_wins = 0;
+    int below_floor = 0;
+    double least_ratio = INFINITY;
     char first[256] = "";
     for (int it = 0; it < nodes; it++) {
         bsp_box cell;
@@ -1495,6 +1497,12 @@ TEST(sah_small_sweep_matches_the_sweep_of_runs)
             bonus_wins += runs.pos == key_float((uint32_t)(e[0] >> 32)) ||
                           runs.pos == key_float((uint32_t)(e[2 * n - 1] >> 32));
         }
+        /* the floor that lets the builder skip sweeps (no_split_saves_enough) */
+        if (runs.found) {
+            double ratio = runs.cost / kd_sweep_linear_least_cost(&b);
+            below_floor += !(ratio >= 1.0);
+            least_ratio = ratio < least_ratio ? ratio : least_ratio;
+        }
         int same = split_choice_same(&one, &runs);
         if (!same && mismatches++ == 0)
             snprintf(first, sizeof first,
@@ -1506,4 +1514,7 @@ TEST(sah_small_sweep_matches_the_sweep_of_runs)
     CHECK_MSG(mismatches == 0, "%d of %d nodes differ; first: %s", mismatches, nodes, first);
     CHECK(found > nodes / 2);
     CHECK_MSG(bonus_wins > nodes / 50, "only %d planes at an end of the lists", bonus_wins);
+    /* no plane costs less than the floor, and some come within 1 % of it */
+    CHECK_MSG(below_floor == 0, "%d planes cost less than kd_sweep_linear_least_cost", below_floor);
+    CHECK_MSG(least_ratio < 1.01, "least cost over the floor %.6f: the floor is loose", least_ratio);
 }

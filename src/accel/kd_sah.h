@@ -259,6 +259,16 @@ HIDDEN void kd_sweep_linear(sah_build *b, const uint64_t *ev, size_t stride, siz
                             double tsum, const bsp_box *cell, double inv_area,
                             split_choice *best);
 
+/* No plane the linear sweep finds costs less than this: its g is never
+ * negative, so a plane costs at least C_trav, C_trav (1 - bonus) with the
+ * empty bonus; the margin covers the rounding of the bonus's transform
+ * (lin_bonus). The builder skips the sweep of a node that no split could
+ * make worth a node (no_split_saves_enough in kd_split_sah.c). */
+static inline double kd_sweep_linear_least_cost(const sah_build *b)
+{
+    return b->ctrav * b->bonus_mul * (1.0 - 1e-9);
+}
+
 /* The same by the sweep of runs at any size (kd_sweep_linear sweeps nodes of
  * fewer than 16 primitives in one pass; the tests compare the two). */
 HIDDEN void kd_sweep_linear_runs(sah_build *b, const uint64_t *ev, size_t stride, size_t n,

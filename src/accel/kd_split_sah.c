@@ -290,6 +290,24 @@ static void merge_back(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn)
     }
 }
 
+/* Whether a node over CELL (N primitives, cost sum TSUM, after BAD bad
+ * refines) is a leaf whatever the linear sweep finds, so that it need not
+ * sweep: a split saves at most the cell's share of the root times TSUM less
+ * the least cost of a plane, and when that is below min_saving, the split
+ * the sweep finds is either no better than the leaf or saves too little
+ * (step 1 below). Only where a bad refine cannot happen, since that would
+ * split a node that does not pay: so the tree is the one the sweep would
+ * have built. Deep in a tree most nodes are this small and most end as
+ * leaves. */
+static int no_split_saves_enough(const sah_build *b, const bsp_box *cell, double tsum, size_t n,
+                                 int bad)
+{
+    if (b->to_limits || (bad < MAX_BAD_REFINES && n >= MIN_BAD_REFINE_PRIMS))
+        return 0;
+    return kd_surface_area(cell) * b->inv_root_area * (tsum - kd_sweep_linear_least_cost(b)) <
+           b->min_saving;
+}
+
 /* Builds the subtree of NODE over CELL from the lists L; ev[top, ...) is
  * free. *COST_OUT: the subtree's cost under the model (for retraction).
  * SURFACE: measure by the surface area. A view measure (sah-per, sah-par)
@@ -322,6 +340,8 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     split_choice best = {INFINITY, 0, 0.0f, 0};
     double inv_area = (surface ? 2.0 : 1.0) / area; /* the sweep uses half areas */
     if (surface && b->linear) {
+        if (no_split_saves_enough(b, &cell, tsum, n, bad))
+            return make_leaf(b, node, b->ev + L.base, n);
         kd_sweep_linear(b, b->ev + L.base, L.stride, n, tsum, &cell, inv_area, &best);
     } else {
         for (unsigned k = 0; k < 3; k++) {
