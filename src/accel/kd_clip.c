@@ -390,8 +390,9 @@ int kd_clip_prim_bounded(const bsp_scene *scene, uint32_t prim, bsp_box pb, cons
             break;
         }
         case SHAPE_POLYGON: {
+            /* its hits: its vertices moved onto its plane (polygon_plane_vertex) */
             const polygon_shape *pg = &scene->polygons[p->slot];
-            r = clip_polygon(scene->verts + pg->first, pg->count, pb, &g, scr, &b);
+            r = clip_polygon(scene->plane_verts + pg->first, pg->count, pb, &g, scr, &b);
             break;
         }
         case SHAPE_CONE:

@@ -58,21 +58,17 @@ int polygon_setup(polygon_shape *p, const bsp_vec3 *verts, uint32_t first, uint3
     return 1;
 }
 
-/* Hits lie on the mean plane, inside the polygon's projection; vertices read
- * with %g precision lie off that plane by up to ~1e-6 of their size. The
- * bounds therefore cover both the vertices and their projections onto the
- * plane along the dropped axis, which is where every hit point can be. */
+/* Hits lie on the mean plane, inside the polygon's projection
+ * (polygon_plane_vertex). The bounds cover both the vertices and their
+ * projections onto the plane along the dropped axis, which is where every
+ * hit point can be. */
 bsp_box polygon_bounds(const polygon_shape *p, const bsp_vec3 *verts)
 {
     bsp_box box = box_empty();
-    int au = p->axis_u, av = p->axis_v, aw = 3 - au - av;
     for (uint32_t i = 0; i < p->count; i++) {
         bsp_vec3 v = verts[p->first + i];
         box = box_add_point(box, v);
-        bsp_vec3 on_plane = v;
-        on_plane.v[aw] =
-            (p->d - p->normal.v[au] * v.v[au] - p->normal.v[av] * v.v[av]) / p->normal.v[aw];
-        box = box_add_point(box, on_plane);
+        box = box_add_point(box, polygon_plane_vertex(p, v));
     }
     return box;
 }

@@ -126,6 +126,18 @@ SHAPES_HIDDEN int cone_setup(cone_shape *c, bsp_vec3 base, double base_radius, b
 SHAPES_HIDDEN bsp_box sphere_bounds(const sphere_shape *s);
 SHAPES_HIDDEN bsp_box triangle_bounds(const triangle_shape *tr);
 SHAPES_HIDDEN bsp_box polygon_bounds(const polygon_shape *p, const bsp_vec3 *verts);
+/* Vertex V of polygon P moved along the dropped axis onto P's mean plane. A
+ * polygon's hits lie on that plane inside the projection of its vertices,
+ * so they are exactly the planar polygon of its vertices moved so: what
+ * bounds and clipping must cover, rather than the vertices as read, which
+ * lie off the plane by ~1e-6 of their size (%g precision) or, in a
+ * non-planar input polygon, by far more. */
+static inline bsp_vec3 polygon_plane_vertex(const polygon_shape *p, bsp_vec3 v)
+{
+    const int au = p->axis_u, av = p->axis_v, aw = 3 - au - av;
+    v.v[aw] = (p->d - p->normal.v[au] * v.v[au] - p->normal.v[av] * v.v[av]) / p->normal.v[aw];
+    return v;
+}
 SHAPES_HIDDEN bsp_box cone_bounds(const cone_shape *c);
 /* The box of the circle of radius R centred at CENTER in the plane with unit
  * normal A (a cross-section of a cone; cone_bounds is the union of its two

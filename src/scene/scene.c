@@ -64,6 +64,7 @@ void bsp_scene_destroy(bsp_scene *s)
     free(s->polygons);
     free(s->cones);
     free(s->verts);
+    free(s->plane_verts);
     free(s->normals);
     polygon_slab_pool_free(&s->slabs);
     free(s->materials);
@@ -210,7 +211,8 @@ static bsp_status add_polygonal(bsp_scene *s, bsp_prim_kind kind, const bsp_vec3
             s->ntriangles++;
         return st;
     }
-    if (!GROW(s->verts, s->cap_verts, s->nverts + n))
+    if (!GROW(s->verts, s->cap_verts, s->nverts + n) ||
+        !GROW(s->plane_verts, s->cap_plane_verts, s->nverts + n))
         return scene_fail(s, err, BSP_ERR_NOMEM, "out of memory");
     memcpy(s->verts + s->nverts, verts, n * sizeof *verts);
     polygon_shape pg;
@@ -218,6 +220,8 @@ static bsp_status add_polygonal(bsp_scene *s, bsp_prim_kind kind, const bsp_vec3
         s->nnormals = old_nnormals;
         return push_prim(s, kind, SHAPE_NONE, 0, err);
     }
+    for (size_t i = 0; i < n; i++)
+        s->plane_verts[s->nverts + i] = polygon_plane_vertex(&pg, s->verts[s->nverts + i]);
     s->nverts += n;
     if (!GROW(s->polygons, s->cap_polygons, s->npolygons + 1) ||
         !polygon_slabs_build(&pg, s->verts, &s->slabs)) {

@@ -68,6 +68,10 @@ struct bsp_scene {
      * normals of patches (triangles and polygons), indexed by the shapes */
     bsp_vec3 *verts;
     size_t nverts, cap_verts;
+    bsp_vec3 *plane_verts; /* verts[i] of a polygon moved onto its mean plane
+                              (polygon_plane_vertex): the outline of its hits,
+                              which the kd-tree builders clip */
+    size_t cap_plane_verts;
     bsp_vec3 *normals;
     size_t nnormals, cap_normals;
     /* the slabs of the polygons with many vertices (polygon_slabs.c) */
