@@ -482,6 +482,23 @@ TEST(kd_empty_scene_and_single_primitive)
 {
     bsp_scene *s = bsp_scene_create();
     check_scene(s, "empty", 200, 12);
+    /* an empty tree costs nothing: its figures are 0, not nan (fuzzing found
+     * `stats` printing "-nan") */
+    for (int v = 0; v < 2; v++) {
+        bsp_build_options o;
+        bsp_build_options_defaults(&o);
+        o.kind = v == 0 ? BSP_ACCEL_KAPLAN : BSP_ACCEL_SAH;
+        bsp_accel *a = NULL;
+        bsp_error err;
+        REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+        bsp_tree_stats st;
+        bsp_accel_tree_stats(a, &st);
+        CHECK_MSG(st.expected_cost == 0.0 && st.model_cost == 0.0,
+                  "empty scene, %s: expected cost %g, model cost %g", v ? "sah" : "kaplan",
+                  st.expected_cost, st.model_cost);
+        CHECK(st.leaves == 1 && st.references == 0);
+        bsp_accel_destroy(a);
+    }
     add_sphere(s, bsp_v3(0, 0, 0), 1);
     check_scene(s, "one sphere", 2000, 13);
     bsp_scene_destroy(s);

@@ -165,7 +165,9 @@ void kd_tree_stats(const kd_tree *t, const bsp_scene *scene, const bsp_sah_costs
     stats_node(&w, 0, t->box, 0);
     st->avg_leaf_depth = st->leaves ? w.depth_sum / (double)st->leaves : 0.0;
     st->bytes = (uint64_t)t->nnodes * sizeof(kd_node) + (uint64_t)t->nprims * sizeof(uint32_t);
-    double root = box_area(t->box);
+    /* no primitive: an empty root box, nothing to test (its "area" would be
+     * inf - -inf, and the costs nan) */
+    double root = box_is_empty(t->box) ? 0.0 : box_area(t->box);
     st->expected_cost = root > 0 ? w.cost / root : 0.0;
     st->model_cost = root > 0 ? w.model / root / costs->traversal : 0.0;
 }
