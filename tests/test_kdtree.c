@@ -504,6 +504,57 @@ TEST(kd_empty_scene_and_single_primitive)
     bsp_scene_destroy(s);
 }
 
+/* A build that would outgrow max_tree_bytes fails with BSP_ERR_LIMIT and a
+ * message naming the limits, instead of running out of memory. Three
+ * triangles spanning the same box overlap every cell, so Kaplan's tree grows
+ * as 2^depth (the fuzzer's `--max-depth 40` ran 30 s into 7 GB); the SAH
+ * build (in tasks, spliced) is checked on random spheres. */
+TEST(kd_tree_size_limit)
+{
+    bsp_scene *tris = bsp_scene_create(), *balls = bsp_scene_create();
+    bsp_vec3 tri[3][3] = {{{{0, 0, 0}}, {{1, 0, 0}}, {{0, 1, 1}}},
+                          {{{0, 0, 0}}, {{1, 0, 1}}, {{0, 1, 0}}},
+                          {{{0, 0, 1}}, {{1, 0, 0}}, {{0, 1, 0}}}};
+    for (int i = 0; i < 3; i++)
+        REQUIRE(bsp_scene_add_polygon(tris, tri[i], 3, NULL) == BSP_OK);
+    rng = 16;
+    for (int i = 0; i < 3000; i++) {
+        bsp_vec3 c = bsp_v3(rnd(), rnd(), rnd());
+        REQUIRE(bsp_scene_add_sphere(balls, c, 0.002 + 0.01 * rnd(), NULL) == BSP_OK);
+    }
+    for (int v = 0; v < 2; v++) {
+        bsp_scene *s = v == 0 ? tris : balls;
+        bsp_build_options o;
+        bsp_build_options_defaults(&o);
+        o.kind = v == 0 ? BSP_ACCEL_KAPLAN : BSP_ACCEL_SAH;
+        o.max_depth = 12;
+        o.max_leaf_prims = 2;
+        o.threads = 2;
+        bsp_accel *a = NULL;
+        bsp_error err;
+        REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+        bsp_tree_stats st;
+        bsp_accel_tree_stats(a, &st);
+        bsp_accel_destroy(a);
+        CHECK_MSG(st.leaves > 1000, "%s: %llu leaves", v ? "sah" : "kaplan",
+                  (unsigned long long)st.leaves);
+        /* Kaplan's build never takes back a node: its own size is enough */
+        if (v == 0) {
+            o.max_tree_bytes = (size_t)st.bytes;
+            CHECK(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+            bsp_accel_destroy(a);
+        }
+        o.max_tree_bytes = (size_t)st.bytes / 2;
+        a = NULL;
+        CHECK_EQ_INT(bsp_accel_build(s, &o, &a, &err), BSP_ERR_LIMIT);
+        CHECK(a == NULL);
+        CHECK_STR_CONTAINS(err.message, "the kd-tree outgrew its size limit");
+        CHECK_STR_CONTAINS(err.message, "maximum depth (now 12; --max-depth)");
+    }
+    bsp_scene_destroy(tris);
+    bsp_scene_destroy(balls);
+}
+
 /* --- every ray of a render ------------------------------------------------------------------ */
 
 /* An accelerator that answers with the naive method and checks every kd

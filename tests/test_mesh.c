@@ -291,6 +291,26 @@ TEST(mesh_ply_ascii_extra_properties_and_elements)
     bsp_scene_destroy(s);
 }
 
+/* PLY faces have no line of their own (binary files have no lines): the
+ * warning about dropped faces names the file and the first face's index. */
+TEST(mesh_ply_degenerate_faces_warning_names_file_and_face)
+{
+    const char text[] = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n"
+                        "property float y\nproperty float z\nelement face 4\n"
+                        "property list uchar int vertex_indices\nend_header\n"
+                        "0 0 0\n1 0 0\n2 0 0\n0 1 0\n"
+                        "3 0 1 3\n3 0 1 2\n3 0 1 3\n4 0 0 1 1\n";
+    bsp_scene *s = load_mem_ok(ply_load_memory, text, sizeof text - 1, "flat.ply");
+    REQUIRE(bsp_scene_prim_count(s) == 4);
+    CHECK_EQ_INT(bsp_scene_prim_kind(s, 1), BSP_PRIM_DROPPED);
+    CHECK_EQ_INT(bsp_scene_prim_kind(s, 3), BSP_PRIM_DROPPED);
+    CHECK_EQ_INT(bsp_scene_warning_count(s), 1);
+    CHECK_STR_CONTAINS(warning_with(s, "polygons"),
+                       "flat.ply: dropped 2 degenerate polygons with zero area (the first is "
+                       "primitive 1)");
+    bsp_scene_destroy(s);
+}
+
 /* A mesh written in every supported form. Coordinates are exact in float. */
 static const double mesh_verts[][3] = {
     {0, 0, 0},     {1, 0, 0},      {1, 1, 0},   {0, 1, 0},     {0.5, 0.5, 1.25}, {2, 0, 0},
@@ -762,7 +782,8 @@ static const bad_case ply_bad[] = {
     {"bad_float_count.ply", BSP_ERR_PARSE, 4, 0, "count type 'float': it must be an integer type"},
     {"bad_unknown_type.ply", BSP_ERR_PARSE, 4, 0, "unknown property type 'int64'"},
     {"bad_property_first.ply", BSP_ERR_PARSE, 3, 0, "'property' before any 'element'"},
-    {"bad_element_count.ply", BSP_ERR_PARSE, 3, 0, "element count must be a whole number, found '-3'"},
+    {"bad_element_count.ply", BSP_ERR_PARSE, 3, 0,
+     "element count must be a whole number, found '-3'"},
     {"bad_unknown_header.ply", BSP_ERR_PARSE, 3, 0, "unknown header line 'elemnt vertex 3'"},
     {"bad_duplicate_property.ply", BSP_ERR_PARSE, 6, 0,
      "duplicate property 'x' in element 'vertex'"},
@@ -771,7 +792,8 @@ static const bad_case ply_bad[] = {
     {"bad_face_without_vertex.ply", BSP_ERR_PARSE, 3, 0, "element 'face' but no element 'vertex'"},
     /* sizes */
     {"bad_vertex_limit.ply", BSP_ERR_LIMIT, 3, 0, "element 'vertex' with 999999999999 items"},
-    {"bad_face_limit.ply", BSP_ERR_LIMIT, 7, 0, "element 'face' with 99999999999999999999 items (the limit is 268435456)"},
+    {"bad_face_limit.ply", BSP_ERR_LIMIT, 7, 0,
+     "element 'face' with 99999999999999999999 items (the limit is 268435456)"},
     {"bad_ascii_count_exceeds_file.ply", BSP_ERR_PARSE, 3, 0,
      "element 'vertex' declares 3 items of at least 6 bytes each, but only 12 bytes"},
     /* ascii data */
@@ -779,19 +801,33 @@ static const bad_case ply_bad[] = {
      "truncated data: face 0, property 'vertex_indices' is missing (end of input)"},
     {"bad_ascii_index_range.ply", BSP_ERR_PARSE, 13, 0,
      "vertex index 3 in face 0 is out of range (3 vertices)"},
-    {"bad_ascii_negative_index.ply", BSP_ERR_PARSE, 13, 0, "vertex index -1 in face 0 is out of range"},
+    {"bad_ascii_negative_index.ply", BSP_ERR_PARSE, 13, 0,
+     "vertex index -1 in face 0 is out of range"},
     {"bad_ascii_nan.ply", BSP_ERR_INVALID, 11, 0,
      "non-finite number 'NaN' in vertex 1, property 'y'"},
-    {"bad_ascii_inf.ply", BSP_ERR_INVALID, 12, 0, "non-finite number '-inf' in vertex 2, property 'z'"},
+    {"bad_ascii_inf.ply", BSP_ERR_INVALID, 12, 0,
+     "non-finite number '-inf' in vertex 2, property 'z'"},
     {"bad_ascii_malformed.ply", BSP_ERR_PARSE, 11, 0,
      "malformed number '1.0.0' in vertex 1, property 'x'"},
     {"bad_ascii_two_vertices.ply", BSP_ERR_PARSE, 13, 0, "face 0 has 2 vertices (at least 3"},
-    {"bad_ascii_negative_count.ply", BSP_ERR_PARSE, 13, 0, "negative list count -1 in face 0"},
+    {"bad_ascii_negative_count.ply", BSP_ERR_PARSE, 13, 0,
+     "'-1' in face 0, property 'vertex_indices' is out of range of type uchar (0 to 255)"},
     {"bad_ascii_fraction_count.ply", BSP_ERR_PARSE, 13, 0,
      "malformed integer '3.0' in face 0, property 'vertex_indices'"},
     {"bad_ascii_extra_data.ply", BSP_ERR_PARSE, 14, 0, "extra data '3' after the last element"},
     {"bad_ascii_skipped_malformed.ply", BSP_ERR_PARSE, 12, 0,
-     "malformed number 'abc' in vertex 1, property 'red'"},
+     "malformed integer 'abc' in vertex 1, property 'red' (type uchar)"},
+    /* ascii values must fit their declared type, as binary ones do */
+    {"bad_ascii_uchar_negative.ply", BSP_ERR_PARSE, 11, 0,
+     "'-5' in vertex 1, property 'x' is out of range of type uchar (0 to 255)"},
+    {"bad_ascii_uchar_fraction.ply", BSP_ERR_PARSE, 12, 0,
+     "malformed integer '0.5' in vertex 2, property 'x' (type uchar)"},
+    {"bad_ascii_list_count_range.ply", BSP_ERR_PARSE, 13, 0,
+     "'256' in face 0, property 'vertex_indices' is out of range of type uchar (0 to 255)"},
+    {"bad_ascii_float_range.ply", BSP_ERR_PARSE, 11, 0,
+     "'1e39' in vertex 1, property 'x' is out of range of type float"},
+    {"bad_ascii_huge_coordinate.ply", BSP_ERR_INVALID, 12, 0,
+     "'-2e30' in vertex 2, property 'x' is out of range (coordinates must lie within +-1e+30)"},
 };
 
 /* Binary PLY cases: the header, the data bytes after it, and the expected
@@ -835,17 +871,17 @@ static const bin_case bin_bad[] = {
     {"bad_bin_truncated_scalar.ply",
      "ply\nformat binary_little_endian 1.0\nelement junk 1\nproperty list uchar double w\n"
      "element vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n",
-     BIN("\x02\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0" /* junk: two doubles */
+     BIN("\x02\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0"       /* junk: two doubles */
          "\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0"), /* 1 2/3 vertices */
      BSP_ERR_PARSE, 0, 37, "truncated data: vertex 1, property 'z' needs 4 bytes, 0 remain"},
     {"bad_bin_truncated_last_face.ply",
      "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\n"
      "property float y\nproperty float z\nelement face 3\nproperty list int int "
      "vertex_indices\nend_header\n",
-     BIN("\0\0\0\0\0\0\0\0\0\0\0\0"                       /* the vertex */
-         "\x03\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0"              /* face 0 */
-         "\x03\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0"              /* face 1 */
-         "\x03\0\0\0"),                                /* face 2: count only */
+     BIN("\0\0\0\0\0\0\0\0\0\0\0\0"           /* the vertex */
+         "\x03\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0" /* face 0 */
+         "\x03\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0" /* face 1 */
+         "\x03\0\0\0"),                       /* face 2: count only */
      BSP_ERR_PARSE, 0, 44,
      "truncated data: list of 3 items in face 2, property 'vertex_indices', but only 0 bytes"},
     {"bad_bin_count_exceeds_file.ply",
@@ -865,7 +901,9 @@ static const bin_case bin_bad[] = {
      BIN(TRI_BE_VERTS "\x03\0\0\0\0\xff\xff\xff\xfe\0\0\0\x01"), BSP_ERR_PARSE, 0, 77,
      "vertex index -2 in face 0 is out of range"},
     {"bad_bin_nan_float.ply", TRI_LE_HEADER,
-     BIN("\0\0\0\0\0\0\0\0\0\0\0\0" "\0\0\x80\x3f\0\0\xc0\x7f\0\0\0\0" "\0\0\0\0\0\0\x80\x3f\0\0\0\0"
+     BIN("\0\0\0\0\0\0\0\0\0\0\0\0"
+         "\0\0\x80\x3f\0\0\xc0\x7f\0\0\0\0"
+         "\0\0\0\0\0\0\x80\x3f\0\0\0\0"
          "\x03\0\0\0\0\x01\0\0\0\x02\0\0\0"),
      BSP_ERR_INVALID, 0, 16, "non-finite number (nan) in vertex 1, property 'y'"},
     {"bad_bin_inf_double_be.ply", TRI_BE_DOUBLE_HEADER,
@@ -874,6 +912,13 @@ static const bin_case bin_bad[] = {
          "\0\0\0\0\0\0\0\0\x3f\xf0\0\0\0\0\0\0\0\0\0\0\0\0\0\0"
          "\0\0\0\x03\0\0\0\0\0\0\0\x01\0\0\0\x02"),
      BSP_ERR_INVALID, 0, 16, "non-finite number (-inf) in vertex 0, property 'z'"},
+    {"bad_bin_huge_double_be.ply", TRI_BE_DOUBLE_HEADER,
+     BIN("\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0"
+         "\x3f\xf0\0\0\0\0\0\0\x69\x74\xe7\x18\xd7\xd7\x62\x5a\0\0\0\0\0\0\0\0"
+         "\0\0\0\0\0\0\0\0\x3f\xf0\0\0\0\0\0\0\0\0\0\0\0\0\0\0"
+         "\0\0\0\x03\0\0\0\0\0\0\0\x01\0\0\0\x02"),
+     BSP_ERR_INVALID, 0, 32,
+     "1e+200 in vertex 1, property 'y' is out of range (coordinates must lie within +-1e+30)"},
     {"bad_bin_two_vertices.ply", TRI_LE_HEADER, BIN(TRI_LE_VERTS "\x02\0\0\0\0\x01\0\0\0"),
      BSP_ERR_PARSE, 0, 36, "face 0 has 2 vertices (at least 3 are needed)"},
     {"bad_bin_negative_count.ply",

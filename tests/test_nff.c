@@ -563,8 +563,8 @@ TEST(nff_good_number_syntax)
     l = bsp_scene_light(s, 3);
     CHECK(l->pos.x == 5 && l->pos.y == 0.000001 && l->pos.z == 123456789012345678901234567890.0);
     l = bsp_scene_light(s, 4);
-    CHECK(l->pos.x == 1.7976931348623157e308 && l->pos.y == 2.2250738585072014e-308 &&
-          l->pos.z == 4.9e-324);
+    CHECK(l->color[0] == 1.7976931348623157e308 && l->color[1] == 2.2250738585072014e-308 &&
+          l->color[2] == 4.9e-324);
     CHECK_EQ_INT(bsp_scene_kind_count(s, BSP_PRIM_SPHERE), 1);
     bsp_scene_destroy(s);
 }
@@ -697,7 +697,9 @@ TEST(nff_numbers_match_strtod_bit_for_bit)
         len += (size_t)snprintf(text + len, cap - len, "l");
         for (int k = 0; k < 6; k++) {
             char num[64];
-            random_number(num, sizeof num, k < 3);
+            do /* a position must lie within BSP_SCENE_MAX_COORD; a colour may be larger */
+                random_number(num, sizeof num, k < 3);
+            while (k < 3 && fabs(strtod(num, NULL)) > BSP_SCENE_MAX_COORD);
             want[i * 6 + k] = strtod(num, NULL);
             len += (size_t)snprintf(text + len, cap - len, " %s", num);
         }
@@ -782,6 +784,14 @@ static const bad_case bad_cases[] = {
     {"overflow.nff", BSP_ERR_INVALID, 1, "non-finite number '1e999'"},
     {"nan_in_polygon.nff", BSP_ERR_INVALID, 3, "non-finite number 'NaN' in 'p' record"},
     {"nan_in_camera.nff", BSP_ERR_INVALID, 5, "non-finite number 'nan'"},
+    /* magnitudes beyond BSP_SCENE_MAX_COORD: the record's first line */
+    {"huge_radius.nff", BSP_ERR_INVALID, 2,
+     "sphere: 2e+30 is out of range (coordinates and "
+     "radii must lie within +-1e+30)"},
+    {"huge_polygon.nff", BSP_ERR_INVALID, 1, "polygon: 1e+200 is out of range"},
+    {"huge_cone.nff", BSP_ERR_INVALID, 1, "cone: -1e+308 is out of range"},
+    {"huge_camera.nff", BSP_ERR_INVALID, 1, "camera: 1e+31 is out of range"},
+    {"huge_light.nff", BSP_ERR_INVALID, 1, "light: 1e+40 is out of range"},
     {"malformed_number.nff", BSP_ERR_PARSE, 1, "malformed number '1.2.3' in 's' record"},
     {"hex_number.nff", BSP_ERR_PARSE, 3, "malformed number '0x10'"},
     {"exponent_missing.nff", BSP_ERR_PARSE, 1, "malformed number '1e'"},

@@ -301,7 +301,8 @@ const char build_args_help[] =
     "                     rays through both and keep the cheaper (default on)\n"
     "  --build-threads N  sah family: build threads (default: every core); the tree is\n"
     "                     the same for any N\n"
-    COST_ARGS_HELP;
+    "  --max-tree-mb N    kd-tree: fail when the nodes and leaf lists need more than N MiB\n"
+    "                     (default: half the machine's memory)\n" COST_ARGS_HELP;
 
 int parse_build_arg(args *a, bsp_build_options *opts)
 {
@@ -318,12 +319,13 @@ int parse_build_arg(args *a, bsp_build_options *opts)
         opts->sah_split_to_limits = 1;
     } else if (!strcmp(s, "--build-threads")) {
         opts->threads = parse_int(a, s, 1, 256);
+    } else if (!strcmp(s, "--max-tree-mb")) {
+        opts->max_tree_bytes = (size_t)parse_int(a, s, 1, 1 << 30) << 20;
     } else if (!strcmp(s, "--mixed-model")) {
         opts->mixed_model = parse_mixed_model(a, s);
     } else if (!strcmp(s, "--mixed-check")) {
         opts->mixed_check = parse_on_off(a, s);
-    } else if (!strcmp(s, "--costs") || !strcmp(s, "--empty-bonus") ||
-               !strcmp(s, "--min-saving")) {
+    } else if (!strcmp(s, "--costs") || !strcmp(s, "--empty-bonus") || !strcmp(s, "--min-saving")) {
         cost_args c = {opts->sah_costs, opts->sah_empty_bonus, opts->sah_min_saving};
         parse_cost_arg(a, &c);
         apply_cost_args(&c, opts);

@@ -76,10 +76,15 @@ bsp_scene *bsp_scene_create(void);
 /* Frees a scene; NULL is a no-op. */
 void bsp_scene_destroy(bsp_scene *scene);
 
+/* The largest magnitude of a coordinate or radius a scene accepts (also for
+ * lights and the camera's from and at): beyond it the kd-trees' float planes,
+ * surface areas and the intersection tests' squares would overflow. */
+#define BSP_SCENE_MAX_COORD 1e30
+
 /* Each add_* appends one primitive with the current material and returns
  * BSP_OK, also when the primitive is degenerate (then it is recorded as
- * BSP_PRIM_DROPPED with a warning). Non-finite input and absurd sizes are
- * errors and add nothing. */
+ * BSP_PRIM_DROPPED with a warning). Non-finite input, coordinates beyond
+ * BSP_SCENE_MAX_COORD and absurd sizes are errors and add nothing. */
 bsp_status bsp_scene_add_sphere(bsp_scene *scene, bsp_vec3 center, double radius,
                          bsp_error *err);
 bsp_status bsp_scene_add_polygon(bsp_scene *scene, const bsp_vec3 *verts, size_t n,

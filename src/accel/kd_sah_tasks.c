@@ -135,6 +135,7 @@ static void run_task(sah_build *w, sah_task *tk)
     memset(sub, 0, sizeof *sub);
     sub->max_depth = main_t->max_depth;
     sub->max_leaf_prims = main_t->max_leaf_prims;
+    sub->max_bytes = main_t->max_bytes; /* the whole tree is checked when spliced */
     sub->pad = main_t->pad;
     sub->box = tk->cell;
     sub->cap_nodes = 1024;
@@ -266,7 +267,7 @@ static int splice(kd_tree *t, const sah_task *tk)
 {
     const kd_tree *s = &tk->sub;
     size_t add = s->nnodes - 1, base = t->nnodes;
-    if (base + add > KD_MAX_NODES)
+    if (!kd_tree_fits(t, base + add, t->nprims + s->nprims))
         return 0;
     if (base + add > t->cap_nodes) {
         size_t ncap = t->cap_nodes;
@@ -327,7 +328,7 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
                 *b->err = tk->err;
             st = tk->st;
         } else if (!splice(b->t, tk)) {
-            st = task_oom(b->err);
+            st = kd_build_failed(b->t, b->err);
         }
     }
     for (size_t i = 0; i < ts->n; i++) {

@@ -36,7 +36,7 @@ static int reserve(median_build *b, size_t need)
 
 static bsp_status oom(median_build *b)
 {
-    return error_set(b->err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
+    return kd_build_failed(b->t, b->err);
 }
 
 /* The node's list is scratch[base, base + n); scratch[top, ...) is free. */

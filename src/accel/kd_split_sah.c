@@ -156,7 +156,7 @@ static void sort_u32(uint32_t *a, size_t n)
 
 static bsp_status oom(sah_build *b)
 {
-    return error_set(b->err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
+    return kd_build_failed(b->t, b->err);
 }
 
 

@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "accel/kd_clip.h"
 #include "accel/kd_cost.h"
@@ -45,9 +46,33 @@ void kd_tree_free(kd_tree *t)
     memset(t, 0, sizeof *t);
 }
 
+int kd_tree_fits(kd_tree *t, size_t nodes, size_t prims)
+{
+    if (nodes > KD_MAX_NODES || prims > UINT32_MAX ||
+        (t->max_bytes && nodes * sizeof(kd_node) + prims * sizeof(uint32_t) > t->max_bytes)) {
+        t->over_limit = 1;
+        return 0;
+    }
+    return 1;
+}
+
+bsp_status kd_build_failed(const kd_tree *t, bsp_error *err)
+{
+    if (!t->over_limit)
+        return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
+    return error_set(
+        err, BSP_ERR_LIMIT, NULL, 0,
+        "the kd-tree outgrew its size limit (%.1f MiB, and at most %u nodes) at %u "
+        "nodes and "
+        "%zu references: lower the maximum depth (now %d; --max-depth), raise the leaf size "
+        "(now %d; --leaf-size) or raise the limit (--max-tree-mb)",
+        (double)t->max_bytes / (1 << 20), (unsigned)KD_MAX_NODES, (unsigned)t->nnodes, t->nprims,
+        t->max_depth, t->max_leaf_prims);
+}
+
 uint32_t kd_alloc_pair(kd_tree *t)
 {
-    if (t->nnodes > KD_MAX_NODES - 2)
+    if (!kd_tree_fits(t, (size_t)t->nnodes + 2, t->nprims))
         return UINT32_MAX;
     if (t->nnodes + 2 > t->cap_nodes) {
         uint32_t ncap = t->cap_nodes * 2;
@@ -66,7 +91,7 @@ uint32_t kd_alloc_pair(kd_tree *t)
 
 int kd_reserve_prims(kd_tree *t, size_t more)
 {
-    if (t->nprims + more > UINT32_MAX)
+    if (!kd_tree_fits(t, t->nnodes, t->nprims + more))
         return 0;
     if (t->nprims + more > t->cap_prims) {
         size_t ncap = t->cap_prims ? t->cap_prims : 1024;
@@ -374,6 +399,15 @@ static void kd_destroy(void *impl)
 
 static const accel_ops kd_ops = {kd_intersect, kd_occluded, kd_destroy};
 
+/* The default tree size limit; 0 (none) when the system does not say. */
+static size_t half_physical_memory(void)
+{
+    long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGESIZE);
+    if (pages <= 0 || size <= 0)
+        return 0;
+    return (size_t)pages / 2 * (size_t)size;
+}
+
 bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
 {
     bsp_build_options *o = &a->opts;
@@ -398,6 +432,7 @@ bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
         free(t);
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
     }
+    t->max_bytes = o->max_tree_bytes ? o->max_tree_bytes : half_physical_memory();
     bsp_status st;
     switch (o->kind) {
     case BSP_ACCEL_KAPLAN:

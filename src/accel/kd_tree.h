@@ -91,16 +91,24 @@ typedef struct kd_tree {
     int max_leaf_prims;
     int box_empty; /* traversal: box is empty (no live primitive), every ray misses;
                       set by kd_accel_build once the tree is built */
+    size_t max_bytes; /* the most bytes nodes and references may take (0: no limit) */
+    int over_limit;   /* an allocation failed for max_bytes or KD_MAX_NODES, not for
+                         want of memory: kd_build_failed says which */
 } kd_tree;
 
 /* --- used by builders ------------------------------------------------------ */
 
 /* Appends two adjacent nodes and returns the index of the first, or
- * UINT32_MAX when out of memory or past KD_MAX_NODES. */
+ * UINT32_MAX when out of memory or past KD_MAX_NODES or max_bytes. */
 HIDDEN uint32_t kd_alloc_pair(kd_tree *t);
 /* Room for MORE entries in the leaf index array; 0 when out of memory or
- * past 2^32 entries. */
+ * past 2^32 entries or max_bytes. */
 HIDDEN int kd_reserve_prims(kd_tree *t, size_t more);
+/* 1 when T may hold NODES nodes and PRIMS references; else sets over_limit. */
+HIDDEN int kd_tree_fits(kd_tree *t, size_t nodes, size_t prims);
+/* The error of a build that could not grow T: its size limit when over_limit,
+ * else out of memory. */
+HIDDEN bsp_status kd_build_failed(const kd_tree *t, bsp_error *err);
 /* Makes node I a leaf listing PRIMS[0..N). Returns 0 when out of memory. */
 HIDDEN int kd_make_leaf(kd_tree *t, uint32_t i, const uint32_t *prims, size_t n);
 /* Makes node I interior with children at CHILD, CHILD + 1. */

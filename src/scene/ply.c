@@ -37,6 +37,7 @@
  * anything is allocated. Degenerate faces are dropped by the builder with one
  * warning. On failure *out is NULL and nothing is kept.
  */
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
@@ -81,6 +82,15 @@ static const struct {
 static int type_is_integer(ply_type t)
 {
     return t >= PT_INT8 && t <= PT_UINT32;
+}
+
+/* The range of integer type T. */
+static void integer_range(ply_type t, long long *lo, long long *hi)
+{
+    int bits = (int)type_info[t].size * 8;
+    int is_signed = t == PT_INT8 || t == PT_INT16 || t == PT_INT32;
+    *lo = is_signed ? -(1LL << (bits - 1)) : 0;
+    *hi = is_signed ? (1LL << (bits - 1)) - 1 : (1LL << bits) - 1;
 }
 
 typedef enum ply_role { ROLE_SKIP = 0, ROLE_X, ROLE_Y, ROLE_Z, ROLE_INDICES } ply_role;
@@ -599,6 +609,11 @@ static bsp_status read_value(ply_parser *P, const where *w, ply_type t, int inte
         if (must_be_finite && !isfinite(v))
             return dfail(P, BSP_ERR_INVALID, P->pos, 0, "non-finite number (%g) in %s", v,
                          where_str(w, at, sizeof at));
+        if (must_be_finite && fabs(v) > BSP_SCENE_MAX_COORD)
+            return dfail(P, BSP_ERR_INVALID, P->pos, 0,
+                         "%g in %s is out of range (coordinates "
+                         "must lie within +-%g)",
+                         v, where_str(w, at, sizeof at), BSP_SCENE_MAX_COORD);
         P->pos += n;
         if (integer)
             *i = (long long)v; /* integer types only: exact */
@@ -611,10 +626,23 @@ static bsp_status read_value(ply_parser *P, const where *w, ply_type t, int inte
     if (!ascii_token(P, &s, &len, &line))
         return dfail(P, BSP_ERR_PARSE, 0, line, "truncated data: %s is missing (end of input)",
                      where_str(w, at, sizeof at));
-    if (integer) {
-        if (!mesh_parse_integer(s, len, i))
-            return dfail(P, BSP_ERR_PARSE, 0, line, "malformed integer %s in %s",
-                         SHOW(s, len, shown), where_str(w, at, sizeof at));
+    /* An ASCII value must be what its declared type can hold, as in binary
+     * files: an integer type takes an integer in its range, float a finite
+     * value within float's range (or a non-finite one where allowed). */
+    if (type_is_integer(t)) {
+        long long k, lo, hi;
+        if (!mesh_parse_integer(s, len, &k))
+            return dfail(P, BSP_ERR_PARSE, 0, line, "malformed integer %s in %s (type %s)",
+                         SHOW(s, len, shown), where_str(w, at, sizeof at), type_info[t].name);
+        integer_range(t, &lo, &hi);
+        if (k < lo || k > hi)
+            return dfail(P, BSP_ERR_PARSE, 0, line,
+                         "%s in %s is out of range of type %s (%lld to %lld)", SHOW(s, len, shown),
+                         where_str(w, at, sizeof at), type_info[t].name, lo, hi);
+        if (integer)
+            *i = k;
+        else
+            *d = (double)k;
         return BSP_OK;
     }
     double v = 0.0;
@@ -625,6 +653,13 @@ static bsp_status read_value(ply_parser *P, const where *w, ply_type t, int inte
     if (r == MESH_NUM_NONFINITE && must_be_finite)
         return dfail(P, BSP_ERR_INVALID, 0, line, "non-finite number %s in %s",
                      SHOW(s, len, shown), where_str(w, at, sizeof at));
+    if (t == PT_FLOAT32 && isfinite(v) && fabs(v) > FLT_MAX)
+        return dfail(P, BSP_ERR_PARSE, 0, line, "%s in %s is out of range of type float",
+                     SHOW(s, len, shown), where_str(w, at, sizeof at));
+    if (must_be_finite && fabs(v) > BSP_SCENE_MAX_COORD)
+        return dfail(P, BSP_ERR_INVALID, 0, line,
+                     "%s in %s is out of range (coordinates must lie within +-%g)",
+                     SHOW(s, len, shown), where_str(w, at, sizeof at), BSP_SCENE_MAX_COORD);
     *d = v;
     return BSP_OK;
 }

@@ -117,7 +117,9 @@ void scene_finish(bsp_scene *s)
             scene_warn(s, "%s:%zu: dropped %zu degenerate %s (first here)", s->src_name,
                        s->dropped_first_line[k], n, drop_reason[k]);
         else
-            scene_warn(s, "dropped %zu degenerate %s", n, drop_reason[k]);
+            scene_warn(s, "%s%sdropped %zu degenerate %s (the first is primitive %zu)",
+                       s->src_name ? s->src_name : "", s->src_name ? ": " : "", n, drop_reason[k],
+                       s->dropped_first_prim[k]);
     }
 }
 
@@ -136,8 +138,10 @@ static bsp_status push_prim(bsp_scene *s, bsp_prim_kind kind, shape_kind shape, 
     p->material = (uint32_t)s->current_material;
     if (shape == SHAPE_NONE) {
         s->kind_count[BSP_PRIM_DROPPED]++;
-        if (s->dropped_by_kind[kind]++ == 0)
+        if (s->dropped_by_kind[kind]++ == 0) {
             s->dropped_first_line[kind] = s->src_line;
+            s->dropped_first_prim[kind] = s->nprims - 1;
+        }
     } else {
         s->kind_count[kind]++;
         s->bounds = box_union(s->bounds, bsp_scene_prim_bounds(s, s->nprims - 1));
@@ -153,10 +157,29 @@ static int finite_all(const double *x, size_t n)
     return 1;
 }
 
+/* Coordinates and radii must be finite and at most BSP_SCENE_MAX_COORD in
+ * magnitude: beyond it the float split planes of the kd-trees, surface areas
+ * and the intersection tests' squares would overflow. */
+static bsp_status check_coords(bsp_scene *s, bsp_error *err, const char *what, const double *x,
+                               size_t n)
+{
+    if (!finite_all(x, n))
+        return scene_fail(s, err, BSP_ERR_INVALID, "%s: non-finite number", what);
+    for (size_t i = 0; i < n; i++)
+        if (fabs(x[i]) > BSP_SCENE_MAX_COORD)
+            return scene_fail(s, err, BSP_ERR_INVALID,
+                              "%s: %g is out of range (coordinates and radii must lie within "
+                              "+-%g)",
+                              what, x[i], BSP_SCENE_MAX_COORD);
+    return BSP_OK;
+}
+
 bsp_status bsp_scene_add_sphere(bsp_scene *s, bsp_vec3 center, double radius, bsp_error *err)
 {
-    if (!v3_is_finite(center) || !isfinite(radius))
-        return scene_fail(s, err, BSP_ERR_INVALID, "sphere: non-finite number");
+    double all[4] = {center.x, center.y, center.z, radius};
+    bsp_status bad = check_coords(s, err, "sphere", all, 4);
+    if (bad != BSP_OK)
+        return bad;
     sphere_shape sh;
     if (!sphere_setup(&sh, center, radius))
         return push_prim(s, BSP_PRIM_SPHERE, SHAPE_NONE, 0, err);
@@ -178,7 +201,10 @@ static bsp_status add_polygonal(bsp_scene *s, bsp_prim_kind kind, const bsp_vec3
         return scene_fail(s, err, BSP_ERR_LIMIT, "%s with %zu vertices (the limit is %zu)", what,
                           n, SCENE_MAX_POLY_VERTS);
     for (size_t i = 0; i < n; i++) {
-        if (!v3_is_finite(verts[i]) || (normals && !v3_is_finite(normals[i])))
+        bsp_status bad = check_coords(s, err, what, verts[i].v, 3);
+        if (bad != BSP_OK)
+            return bad;
+        if (normals && !v3_is_finite(normals[i]))
             return scene_fail(s, err, BSP_ERR_INVALID, "%s: non-finite number", what);
     }
     if (n < 3)
@@ -249,9 +275,10 @@ bsp_status bsp_scene_add_patch(bsp_scene *s, const bsp_vec3 *verts, const bsp_ve
 bsp_status bsp_scene_add_cone(bsp_scene *s, bsp_vec3 base, double base_radius, bsp_vec3 apex,
                               double apex_radius, bsp_error *err)
 {
-    if (!v3_is_finite(base) || !v3_is_finite(apex) || !isfinite(base_radius) ||
-        !isfinite(apex_radius))
-        return scene_fail(s, err, BSP_ERR_INVALID, "cone: non-finite number");
+    double all[8] = {base.x, base.y, base.z, base_radius, apex.x, apex.y, apex.z, apex_radius};
+    bsp_status bad = check_coords(s, err, "cone", all, 8);
+    if (bad != BSP_OK)
+        return bad;
     if ((base_radius < 0 || apex_radius < 0) && (base_radius > 0 || apex_radius > 0))
         return scene_fail(s, err, BSP_ERR_INVALID,
                           "cone: radii %g and %g have different signs (negative radii, "
@@ -307,6 +334,9 @@ bsp_status bsp_scene_add_light(bsp_scene *s, const bsp_light *light, bsp_error *
                      light->color[0], light->color[1], light->color[2]};
     if (!finite_all(all, 6))
         return scene_fail(s, err, BSP_ERR_INVALID, "light: non-finite number");
+    bsp_status bad = check_coords(s, err, "light", all, 3);
+    if (bad != BSP_OK)
+        return bad;
     if (light->color[0] < 0 || light->color[1] < 0 || light->color[2] < 0)
         return scene_fail(s, err, BSP_ERR_INVALID, "light: negative colour");
     if (s->nlights >= SCENE_MAX_LIGHTS)
@@ -326,6 +356,9 @@ bsp_status bsp_scene_set_camera(bsp_scene *s, const bsp_camera *c, bsp_error *er
                       c->up.x,   c->up.y,   c->up.z,   c->angle_deg, c->hither};
     if (!finite_all(all, 11))
         return scene_fail(s, err, BSP_ERR_INVALID, "camera: non-finite number");
+    bsp_status bad = check_coords(s, err, "camera", all, 6); /* from and at */
+    if (bad != BSP_OK)
+        return bad;
     bsp_vec3 dir = v3_sub(c->at, c->from);
     double ldir = v3_length(dir), lup = v3_length(c->up);
     if (ldir == 0)

@@ -98,7 +98,8 @@ struct bsp_scene {
     size_t nwarnings;
     /* degenerate input per original kind: how many, and where first met */
     size_t dropped_by_kind[BSP_PRIM_KIND_COUNT];
-    size_t dropped_first_line[BSP_PRIM_KIND_COUNT];
+    size_t dropped_first_line[BSP_PRIM_KIND_COUNT]; /* 0: no line (binary input, API) */
+    size_t dropped_first_prim[BSP_PRIM_KIND_COUNT]; /* its primitive index */
     int finished; /* scene_finish has run */
 
     /* the location loaders report in messages: file name and current line
