@@ -504,6 +504,112 @@ TEST(kd_empty_scene_and_single_primitive)
     bsp_scene_destroy(s);
 }
 
+/* Rays outside the traversal's precision domain (kd_tree.h): origins millions
+ * to 1e25 scene sizes away, whose points the traversal cannot place to within
+ * the padding, and directions as short as 1e-300 or as long as 1e300. Each
+ * tree must still answer as naive, which it does by taking the naive loop.
+ * The first two rays are the fuzzer's: before, Kaplan's tree missed sphere 2
+ * of the first scene (its entry and exit points rounded to x = 0), and the
+ * SAH tree answered sphere 2 instead of 0 for the second (all four at the
+ * same rounded t). */
+static void check_rays_as_naive(const bsp_scene *s, const char *name, const bsp_ray *rays,
+                                int nrays)
+{
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_NAIVE;
+    bsp_accel *naive = NULL;
+    bsp_error err;
+    REQUIRE(bsp_accel_build(s, &o, &naive, &err) == BSP_OK);
+    bsp_query *nq = bsp_query_create(naive);
+    for (int v = 0; v < 4; v++) {
+        bsp_build_options_defaults(&o);
+        o.kind = v < 2 ? BSP_ACCEL_KAPLAN : BSP_ACCEL_SAH;
+        o.mailbox = v % 2;
+        bsp_accel *a = NULL;
+        REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+        bsp_query *q = bsp_query_create(a);
+        int bad = 0;
+        for (int i = 0; i < nrays && bad < 5; i++) {
+            bsp_hit hn, hk;
+            int fn = bsp_intersect(naive, nq, &rays[i], &hn);
+            int fk = bsp_intersect(a, q, &rays[i], &hk);
+            int on = bsp_occluded(naive, nq, &rays[i]), ok = bsp_occluded(a, q, &rays[i]);
+            if (!same_hit(fn, &hn, fk, &hk) || on != ok) {
+                bad++;
+                CHECK_MSG(0,
+                          "%s: %s mailbox %d, ray %d (%.17g %.17g %.17g  %.17g %.17g %.17g): "
+                          "naive %d prim %u t %.17g occl %d; kd %d prim %u t %.17g occl %d",
+                          name, bsp_accel_kind_name(o.kind), o.mailbox, i, rays[i].org.x,
+                          rays[i].org.y, rays[i].org.z, rays[i].dir.x, rays[i].dir.y, rays[i].dir.z,
+                          fn, fn ? hn.prim : 0, fn ? hn.t : 0, on, fk, fk ? hk.prim : 0,
+                          fk ? hk.t : 0, ok);
+            }
+        }
+        bsp_query_destroy(q);
+        bsp_accel_destroy(a);
+    }
+    bsp_query_destroy(nq);
+    bsp_accel_destroy(naive);
+}
+
+TEST(kd_exact_far_origins_and_extreme_directions)
+{
+    bsp_ray one = {bsp_v3(1e18, 5, 0), bsp_v3(-1, 0, 0), 0.0, INFINITY};
+    bsp_scene *s = bsp_scene_create();
+    add_sphere(s, bsp_v3(6, 0, 0), 0.3);
+    add_sphere(s, bsp_v3(8, 0, 0), 0.3);
+    add_sphere(s, bsp_v3(10, 5, 0), 0.3);
+    check_rays_as_naive(s, "three spheres", &one, 1);
+    bsp_scene_destroy(s);
+
+    one.org = bsp_v3(1e20, 0, 0);
+    s = bsp_scene_create();
+    for (int i = 0; i < 4; i++)
+        add_sphere(s, bsp_v3(8 - 2 * i, 0, 0), 0.3);
+    check_rays_as_naive(s, "four spheres in a row", &one, 1);
+    bsp_scene_destroy(s);
+
+    /* random spheres, triangles and a cone; rays aimed at points of the box
+     * from far away, and rays of extreme direction lengths */
+    s = bsp_scene_create();
+    rng = 1616;
+    for (int i = 0; i < 300; i++) {
+        bsp_vec3 c = bsp_v3(rnd_in(-10, 10), rnd_in(-10, 10), rnd_in(-10, 10));
+        if (i % 3 == 0)
+            add_sphere(s, c, rnd_in(0.1, 1.0));
+        else
+            add_tri(s, c, v3_add(c, bsp_v3(rnd_in(-2, 2), rnd_in(-2, 2), 0)),
+                    v3_add(c, bsp_v3(0, rnd_in(-2, 2), rnd_in(-2, 2))));
+    }
+    REQUIRE(bsp_scene_add_cone(s, bsp_v3(0, 0, -10), 1, bsp_v3(0, 0, 10), 0.5, NULL) == BSP_OK);
+    enum { NR = 3000 };
+    bsp_ray *rays = malloc(NR * sizeof *rays);
+    REQUIRE(rays);
+    static const double far[] = {1e5, 1e7, 1e9, 1e12, 1e18, 1e25};
+    static const double len[] = {1e-300, 1e-160, 1e-110, 1e-90, 1e90, 1e110, 1e160, 1e300};
+    for (int i = 0; i < NR; i++) {
+        bsp_vec3 target = bsp_v3(rnd_in(-10, 10), rnd_in(-10, 10), rnd_in(-10, 10));
+        bsp_vec3 d = v3_normalize(bsp_v3(rnd_in(-1, 1), rnd_in(-1, 1), rnd_in(-1, 1)));
+        if (i % 5 == 0) /* along an axis */
+            d = i % 2 ? bsp_v3(0, 0, -1) : bsp_v3(1, 0, 0);
+        rays[i].tmin = 0.0;
+        rays[i].tmax = INFINITY;
+        if (i % 2 == 0) {
+            double f = far[(i / 2) % (sizeof far / sizeof far[0])];
+            rays[i].org = v3_sub(target, v3_scale(d, f));
+            rays[i].dir = d;
+        } else {
+            double l = len[(i / 2) % (sizeof len / sizeof len[0])];
+            rays[i].org = v3_sub(target, v3_scale(d, 30.0));
+            rays[i].dir = v3_scale(d, l);
+        }
+    }
+    check_rays_as_naive(s, "far and extreme rays", rays, NR);
+    free(rays);
+    bsp_scene_destroy(s);
+}
+
 /* A build that would outgrow max_tree_bytes fails with BSP_ERR_LIMIT and a
  * message naming the limits, instead of running out of memory. Three
  * triangles spanning the same box overlap every cell, so Kaplan's tree grows

@@ -352,6 +352,11 @@ TEST(cli_trace_rejects_bad_rays)
         {"# c\n\n0 0 0 1 0 0 5 1\n", "tmax is smaller than tmin", 3},
         {"0 0 0 1 0 0 0 1 7\n", "too many fields", 1},
         {"inf 0 0 1 0 0\n", "malformed or non-finite", 1},
+        /* out of the domain where t and the kernels' squares stay finite */
+        {"0 0 0 1 0 0\n2e30 0 0 1 0 0\n", "origin out of range", 2},
+        {"0.2 0.2 5 0 0 -1e-308\n", "direction length outside [1e-100, 1e100]", 1},
+        {"0 0 5 0 1e-101 -1e-101\n", "direction length outside [1e-100, 1e100]", 1},
+        {"0 0 5 0 0 1e100\n0 0 5 0 8e99 8e99\n", "direction length outside [1e-100, 1e100]", 2},
     };
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
         char path[600], cmd[2048];

@@ -327,6 +327,22 @@ static const char trace_help[] =
     "  --mailbox on|off   test each primitive at most once per ray (default on)\n";
 
 /* Parses one number of a ray line; accepts inf/-inf only where ALLOW_INF. */
+/* A direction whose length lies in [1e-100, 1e100]: t counts lengths of the
+ * direction, so a shorter or longer one can put a hit's t past the doubles
+ * (a hit at t = inf) or its square past the kernels' range. */
+static int ray_direction_in_range(double x, double y, double z)
+{
+    double m = fmax(fabs(x), fmax(fabs(y), fabs(z)));
+    if (!(m > 0.0))
+        return 0;
+    /* the length, scaled so that its square cannot overflow */
+    x /= m;
+    y /= m;
+    z /= m;
+    double len = m * sqrt(x * x + y * y + z * z);
+    return len >= 1e-100 && len <= 1e100;
+}
+
 static int ray_number(char **p, double *out, int allow_inf)
 {
     char *end;
@@ -410,6 +426,12 @@ static int cmd_trace(int argc, char **argv)
             bad = "expected 6 or 8 numbers: 'ox oy oz dx dy dz [tmin tmax]'";
         else if (v[3] == 0 && v[4] == 0 && v[5] == 0)
             bad = "the direction is the zero vector";
+        else if (fabs(v[0]) > BSP_SCENE_MAX_COORD || fabs(v[1]) > BSP_SCENE_MAX_COORD ||
+                 fabs(v[2]) > BSP_SCENE_MAX_COORD)
+            bad = "origin out of range (coordinates must lie within +-1e+30, as a scene's)";
+        else if (!ray_direction_in_range(v[3], v[4], v[5]))
+            bad = "direction length outside [1e-100, 1e100]: t is measured in units of the "
+                  "direction, so scale it";
         else if (isinf(v[6]) && v[6] > 0)
             bad = "tmin is +inf";
         else if (v[7] < v[6])

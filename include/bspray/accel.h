@@ -226,7 +226,14 @@ const bsp_query_counters *bsp_query_get_counters(const bsp_query *query);
 void bsp_query_reset_counters(bsp_query *query);
 
 /* Closest hit on RAY within [tmin, tmax]. Returns 1 and fills *HIT, or 0 and
- * sets hit->prim = BSP_NO_PRIM. */
+ * sets hit->prim = BSP_NO_PRIM. Every method returns the naive method's
+ * answer for every ray: a kd-tree takes the naive loop itself for a ray
+ * whose origin lies over 10^6 scene scales away or whose direction is
+ * shorter than 1e-100 or longer than 1e100, where its traversal could not
+ * place points to within its padding. t is measured in lengths of the
+ * direction: keep |dir| within [1e-100, 1e100] (and the origin within the
+ * scene coordinates' range), or a hit's t can overflow to inf (`bspray trace`
+ * refuses such rays). */
 int bsp_intersect(const bsp_accel *accel, bsp_query *query, const bsp_ray *ray, bsp_hit *hit);
 
 /* Any hit on RAY within [tmin, tmax]: 1 when something blocks the segment. */

@@ -34,6 +34,11 @@ struct bsp_query {
 
 /* Builds the naive method (no structure; tests every live primitive). */
 HIDDEN bsp_status naive_build(bsp_accel *a, bsp_error *err);
+/* The naive method's queries on SCENE: the reference answers, also taken by
+ * the kd traversal for rays outside its precision domain (kd_traverse.c). */
+HIDDEN int naive_scene_intersect(const bsp_scene *s, bsp_query *q, const bsp_ray *ray,
+                                 bsp_hit *hit);
+HIDDEN int naive_scene_occluded(const bsp_scene *s, bsp_query *q, const bsp_ray *ray);
 
 /* Seconds on a monotonic clock. */
 HIDDEN double accel_now(void);

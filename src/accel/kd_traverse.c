@@ -123,6 +123,18 @@ start(const kd_tree *t, const bsp_ray *ray, const trav_ray *r, double *en, exit_
     return 1;
 }
 
+/* 1 when RAY lies in the traversal's precision domain (kd_tree.h): the sum
+ * of its origin's absolute coordinates (one compare for three; a bound of
+ * the largest) at most far_origin, and dot(d, d) within [KD_DIR_DOT_MIN,
+ * KD_DIR_DOT_MAX]. NaN propagates into the sum and fails every comparison,
+ * so it is outside too. */
+static inline int in_domain(const kd_tree *t, const trav_ray *r)
+{
+    double o1 = fabs(r->o[0]) + fabs(r->o[1]) + fabs(r->o[2]);
+    double dd = r->d[0] * r->d[0] + r->d[1] * r->d[1] + r->d[2] * r->d[2];
+    return o1 <= t->far_origin && dd >= KD_DIR_DOT_MIN && dd <= KD_DIR_DOT_MAX;
+}
+
 /* Starts a new ray in the mailbox: returns its stamp. */
 static inline uint32_t mailbox_next(bsp_query *q, size_t nprims)
 {
@@ -275,6 +287,8 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
     trav_ray tr;
     hit->prim = BSP_NO_PRIM;
     trav_ray_init(&tr, ray);
+    if (__builtin_expect(!in_domain(t, &tr), 0))
+        return naive_scene_intersect(s, q, ray, hit);
     if (!start(t, ray, &tr, en, stack))
         return 0;
     uint32_t stamp = mailbox_next(q, s->nprims);
@@ -335,6 +349,8 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
     double en[3];
     trav_ray tr;
     trav_ray_init(&tr, ray);
+    if (__builtin_expect(!in_domain(t, &tr), 0))
+        return naive_scene_occluded(s, q, ray);
     if (!start(t, ray, &tr, en, stack))
         return 0;
     uint32_t stamp = mailbox_next(q, s->nprims);

@@ -9,9 +9,8 @@
 
 #include "accel/accel_internal.h"
 
-static int naive_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit)
+int naive_scene_intersect(const bsp_scene *s, bsp_query *q, const bsp_ray *ray, bsp_hit *hit)
 {
-    const bsp_scene *s = a->scene;
     isect_ray r;
     isect_ray_init(&r, ray);
     double tmax = ray->tmax; /* shrinks to the closest hit so far; t never depends on it */
@@ -36,9 +35,8 @@ static int naive_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray,
     return 1;
 }
 
-static int naive_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
+int naive_scene_occluded(const bsp_scene *s, bsp_query *q, const bsp_ray *ray)
 {
-    const bsp_scene *s = a->scene;
     isect_ray r;
     isect_ray_init(&r, ray);
     scene_isect_hit h;
@@ -50,6 +48,16 @@ static int naive_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
             return 1;
     }
     return 0;
+}
+
+static int naive_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit)
+{
+    return naive_scene_intersect(a->scene, q, ray, hit);
+}
+
+static int naive_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
+{
+    return naive_scene_occluded(a->scene, q, ray);
 }
 
 static const accel_ops naive_ops = {naive_intersect, naive_occluded, NULL};
