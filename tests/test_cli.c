@@ -353,9 +353,11 @@ TEST(cli_costs_reach_the_builder)
     CHECK(stats_field(out, "N_V") < (long)want.leaves); /* the default limit prunes */
     free(out);
 
-    const char *bad[] = {"--costs sphere",    "--costs sphere=0",   "--costs bogus=1",
-                         "--costs sphere=1,", "--costs cone=inf",   "--empty-bonus 1",
-                         "--min-saving -1",   "--min-saving inf",   "--min-saving x"};
+    const char *bad[] = {
+        "--costs sphere",         "--costs sphere=0",         "--costs bogus=1",
+        "--costs sphere=1,",      "--costs cone=inf",         "--empty-bonus 1",
+        "--min-saving -1",        "--min-saving inf",         "--min-saving x",
+        "--costs triangle=1e308", "--costs traversal=1e-308", "--costs sphere=2e6"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         snprintf(cmd, sizeof cmd, "%s stats spd:lattice:2 --accel sah %s 2>&1", harness_cli(),
                  bad[i]);
@@ -364,8 +366,28 @@ TEST(cli_costs_reach_the_builder)
         CHECK_EQ_INT(st, 2);
         CHECK(strstr(out, "--costs") || strstr(out, "--empty-bonus") ||
               strstr(out, "--min-saving"));
+        if (strstr(bad[i], "e308") || strstr(bad[i], "2e6"))
+            CHECK_STR_CONTAINS(out, "every cost must be a number in [1e-6, 1e6]");
         free(out);
     }
+
+    /* the API clamps a cost to [BSP_SAH_COST_MIN, BSP_SAH_COST_MAX]: 1e308
+     * builds the tree of 1e6 (before, the sums overflowed: the tree was one
+     * leaf and its model cost inf) */
+    REQUIRE(bsp_scene_load("spd:tetra:3", &s, &err) == BSP_OK);
+    bsp_tree_stats clamped[2];
+    for (int v = 0; v < 2; v++) {
+        bsp_build_options_defaults(&o);
+        o.sah_costs.triangle = v ? 1e308 : BSP_SAH_COST_MAX;
+        REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+        bsp_accel_tree_stats(a, &clamped[v]);
+        bsp_accel_destroy(a);
+    }
+    bsp_scene_destroy(s);
+    CHECK(clamped[1].interior_nodes > 0 && isfinite(clamped[1].model_cost));
+    CHECK(clamped[0].interior_nodes == clamped[1].interior_nodes &&
+          clamped[0].references == clamped[1].references &&
+          clamped[0].model_cost == clamped[1].model_cost);
 }
 
 /* sah-mixed's check through the CLI: render reports which tree it kept

@@ -212,6 +212,9 @@ static double *cost_field(bsp_sah_costs *c, const char *name, size_t len)
 
 /* --costs NAME=X[,NAME=X...]: the SAH's C_trav and T_i, each positive and
  * finite; names not given keep their defaults (0 in the options). */
+#define STRINGIFY_TEXT(x) #x
+#define STRINGIFY(x) STRINGIFY_TEXT(x)
+
 static void parse_costs(args *a, const char *opt, bsp_sah_costs *c)
 {
     const char *v = opt_value(a, opt), *p = v;
@@ -227,8 +230,12 @@ static void parse_costs(args *a, const char *opt, bsp_sah_costs *c)
                       v);
         char *end;
         double x = strtod(eq + 1, &end);
-        if (end == eq + 1 || (*end && *end != ',') || !(x > 0.0 && isfinite(x)))
-            die_usage(a->usage, "--costs: every cost must be a positive number; got '%s'", v);
+        if (end == eq + 1 || (*end && *end != ',') ||
+            !(x >= BSP_SAH_COST_MIN && x <= BSP_SAH_COST_MAX))
+            die_usage(a->usage,
+                      "--costs: every cost must be a number in [" STRINGIFY(
+                          BSP_SAH_COST_MIN) ", " STRINGIFY(BSP_SAH_COST_MAX) "]; got '%s'",
+                      v);
         *f = x;
         p = *end == ',' ? end + 1 : end;
         if (*end == ',' && !*p)

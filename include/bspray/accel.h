@@ -48,6 +48,12 @@ typedef enum bsp_accel_kind {
  * ratios matter); bsp_calibrate_costs measures them in nanoseconds. In build
  * options a field 0 means the default (measured on the development machine,
  * see src/accel/kd_cost.c). */
+/* The range of a cost (relative to one traversal step) the builders use; a
+ * cost outside it is clamped to it (0, negative or non-finite: the default).
+ * Beyond it the SAH's sums overflow or vanish. */
+#define BSP_SAH_COST_MIN 1e-6
+#define BSP_SAH_COST_MAX 1e6
+
 typedef struct bsp_sah_costs {
     double traversal;      /* C_trav: one traversal step */
     double sphere;         /* one ray-sphere test */

@@ -61,9 +61,12 @@ void kd_cost_defaults(bsp_sah_costs *c)
     c->cone = T_CONE;
 }
 
+/* V, or D when V is not a positive finite number; clamped to the range the
+ * sums of the cost model stay exact in. */
 static double or_default(double v, double d)
 {
-    return v > 0.0 && isfinite(v) ? v : d;
+    double x = v > 0.0 && isfinite(v) ? v : d;
+    return x < BSP_SAH_COST_MIN ? BSP_SAH_COST_MIN : x > BSP_SAH_COST_MAX ? BSP_SAH_COST_MAX : x;
 }
 
 void kd_cost_resolve(const bsp_build_options *o, kd_cost_model *m)
