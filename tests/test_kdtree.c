@@ -610,6 +610,44 @@ TEST(kd_exact_far_origins_and_extreme_directions)
     bsp_scene_destroy(s);
 }
 
+/* A sliver triangle (the angle at its first vertex below 1e-6 rad) is
+ * dropped as degenerate: Moller-Trumbore's barycentrics lose 1/sin of it in
+ * relative precision, and the fuzzer's sliver (sine 1e-30) was "hit" at
+ * x = -1, a whole edge length outside it, by the naive method, where no
+ * tree lists it. Hand-made angles: sine 2e-6 is kept, 5e-7 dropped. */
+TEST(kd_sliver_triangles_dropped_and_exact)
+{
+    bsp_scene *s = bsp_scene_create();
+    bsp_vec3 sliver[3] = {{{1, 0, -2e-30}}, {{-1e-30, 0, 0}}, {{2e-30, 0, -1e-30}}};
+    bsp_vec3 kept[3] = {{{0, 0, 0}}, {{1, 0, 0}}, {{1, 2e-6, 0}}};
+    bsp_vec3 thin[3] = {{{0, 0, 1}}, {{1, 0, 1}}, {{1, 5e-7, 1}}};
+    REQUIRE(bsp_scene_add_polygon(s, sliver, 3, NULL) == BSP_OK);
+    REQUIRE(bsp_scene_add_polygon(s, kept, 3, NULL) == BSP_OK);
+    REQUIRE(bsp_scene_add_polygon(s, thin, 3, NULL) == BSP_OK);
+    add_sphere(s, bsp_v3(0.5, 3, 0), 0.5);
+    CHECK_EQ_INT(bsp_scene_prim_kind(s, 0), BSP_PRIM_DROPPED);
+    CHECK_EQ_INT(bsp_scene_prim_kind(s, 1), BSP_PRIM_POLYGON);
+    CHECK_EQ_INT(bsp_scene_prim_kind(s, 2), BSP_PRIM_DROPPED);
+    bsp_ray rays[2] = {{bsp_v3(7.40236290449003, 1.0896550452977616, -4.598495362999884),
+                        bsp_v3(-0.840236290449003, -0.10896550452977616, 0.45984953629998837), 0.0,
+                        INFINITY},
+                       {bsp_v3(0.9, 1e-6, 1), bsp_v3(0, 0, -1), 0.0, INFINITY}};
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_NAIVE;
+    bsp_accel *naive = NULL;
+    bsp_error err;
+    REQUIRE(bsp_accel_build(s, &o, &naive, &err) == BSP_OK);
+    bsp_query *q = bsp_query_create(naive);
+    bsp_hit h;
+    CHECK(!bsp_intersect(naive, q, &rays[0], &h)); /* the phantom hit is gone */
+    CHECK(bsp_intersect(naive, q, &rays[1], &h) && h.prim == 1 && h.t == 1.0);
+    bsp_query_destroy(q);
+    bsp_accel_destroy(naive);
+    check_rays_as_naive(s, "sliver", rays, 2);
+    bsp_scene_destroy(s);
+}
+
 /* A build that would outgrow max_tree_bytes fails with BSP_ERR_LIMIT and a
  * message naming the limits, instead of running out of memory. Three
  * triangles spanning the same box overlap every cell, so Kaplan's tree grows

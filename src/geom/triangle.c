@@ -15,12 +15,21 @@
 #include "geom/shapes.h"
 #include "geom/vec.h"
 
+/* A sliver (the sine of the angle between e1 and e2 below this) is dropped
+ * as degenerate: the barycentrics below lose 1/sine of relative precision,
+ * and beyond about 1e-8 of an edge their error could report hits outside
+ * the triangle's padded bounds, where no kd-tree lists it. With 1e-6 the
+ * error stays near 1e-9 of an edge. */
+#define TRIANGLE_MIN_SINE 1e-6
+
 int triangle_setup(triangle_shape *tr, bsp_vec3 a, bsp_vec3 b, bsp_vec3 c, uint32_t normals)
 {
     bsp_vec3 e1 = v3_sub(b, a), e2 = v3_sub(c, a);
     bsp_vec3 n = v3_cross(e1, e2);
     double len = v3_length(n);
     if (!(len > 0.0) || !isfinite(len))
+        return 0;
+    if (len < TRIANGLE_MIN_SINE * v3_length(e1) * v3_length(e2))
         return 0;
     bsp_vec3 unit = bsp_v3(n.x / len, n.y / len, n.z / len);
     if (!v3_is_finite(unit))
