@@ -632,18 +632,9 @@ TEST(kd_sliver_triangles_dropped_and_exact)
                         bsp_v3(-0.840236290449003, -0.10896550452977616, 0.45984953629998837), 0.0,
                         INFINITY},
                        {bsp_v3(0.9, 1e-6, 1), bsp_v3(0, 0, -1), 0.0, INFINITY}};
-    bsp_build_options o;
-    bsp_build_options_defaults(&o);
-    o.kind = BSP_ACCEL_NAIVE;
-    bsp_accel *naive = NULL;
-    bsp_error err;
-    REQUIRE(bsp_accel_build(s, &o, &naive, &err) == BSP_OK);
-    bsp_query *q = bsp_query_create(naive);
     bsp_hit h;
-    CHECK(!bsp_intersect(naive, q, &rays[0], &h)); /* the phantom hit is gone */
-    CHECK(bsp_intersect(naive, q, &rays[1], &h) && h.prim == 1 && h.t == 1.0);
-    bsp_query_destroy(q);
-    bsp_accel_destroy(naive);
+    CHECK(!bsp_scene_intersect_prim(s, 0, &rays[0], &h)); /* the phantom hit is gone */
+    CHECK(bsp_scene_intersect_prim(s, 1, &rays[1], &h) && h.t == 1.0);
     check_rays_as_naive(s, "sliver", rays, 2);
     bsp_scene_destroy(s);
 }
