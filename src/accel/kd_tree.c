@@ -63,8 +63,7 @@ bsp_status kd_build_failed(const kd_tree *t, bsp_error *err)
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
     return error_set(
         err, BSP_ERR_LIMIT, NULL, 0,
-        "the kd-tree outgrew its size limit (%.1f MiB, and at most %u nodes) at %u "
-        "nodes and "
+        "the kd-tree outgrew its size limit (%.1f MiB, and at most %u nodes) at %u nodes and "
         "%zu references: lower the maximum depth (now %d; --max-depth), raise the leaf size "
         "(now %d; --leaf-size) or raise the limit (--max-tree-mb)",
         (double)t->max_bytes / (1 << 20), (unsigned)KD_MAX_NODES, (unsigned)t->nnodes, t->nprims,

@@ -36,8 +36,8 @@
  * rounding error of the points it computes, about 1e-16 (|o| + |d t|), far
  * below the padding. The points lie in the root box, so |d t| <= |o| + the
  * box, and an origin within KD_FAR_ORIGIN_REL scene scales (the sum of its
- * absolute coordinates) keeps the error
- * near 1e-9 scales, 1/100 of the padding; dot(d, d) within
+ * absolute coordinates) keeps the error near 1e-9 scales, 1/100 of the
+ * padding; dot(d, d) within
  * [KD_DIR_DOT_MIN, KD_DIR_DOT_MAX] keeps the kernels' products of d with
  * scene coordinates (at most 1e30) clear of overflow and underflow. Other
  * rays (an origin 1e7 scene sizes away, a direction of length 1e-300, NaN)
