@@ -639,6 +639,141 @@ TEST(kd_sliver_triangles_dropped_and_exact)
     bsp_scene_destroy(s);
 }
 
+/* Primitive 0 of S, missed by RAY, is missed by every method; frees S. */
+static void check_phantom_refused(bsp_scene *s, const char *name, const bsp_ray *ray)
+{
+    bsp_hit h;
+    CHECK_MSG(!bsp_scene_intersect_prim(s, 0, ray, &h), "%s: hit at t %.17g", name, h.t);
+    check_rays_as_naive(s, name, ray, 1);
+    bsp_scene_destroy(s);
+}
+
+/* Rays for which a kernel's arithmetic is ill-conditioned: a ray (almost) in
+ * a triangle's plane leaves Moller-Trumbore's determinant as rounding noise,
+ * and a line passing a cone by a hair its discriminant; the naive method
+ * "hit" such shapes where they are not, and no tree lists them there. The
+ * kernels' hit check (geom/isect.h) refuses a hit whose point is not on the
+ * shape. The fuzzer's three cases (answers known independently: the first
+ * ray starts outside the triangle's bounds, so t = 0 is no hit; the
+ * second's line misses the cone, its exact discriminant being -7.75e-181),
+ * then 4,000 rays in or within a hair of random triangles' planes and 2,000
+ * rays tangent to random cones 10^4 sizes from the origin (origins up to
+ * 10^8 sizes back, direction lengths 1 and 1e-90), against every tree.
+ * Without the check every part fails. */
+TEST(kd_exact_ill_conditioned_hits)
+{
+    bsp_scene *s = bsp_scene_create();
+    add_tri(s, bsp_v3(-0.75, -1, 0.75), bsp_v3(-0.75, -0.9375, 0.8125),
+            bsp_v3(-0.8125, -1, 0.8125));
+    bsp_ray in_plane = {bsp_v3(-0.9375, -1.0625, 0.875),
+                        bsp_v3(-0.4082529184581797, 0.4082436624520584, 0.816496580910238), 0.0,
+                        INFINITY};
+    check_phantom_refused(s, "ray in a triangle's plane", &in_plane);
+
+    /* NFF "c" records: base, base radius, apex, apex radius */
+    static const double cones[4][8] = {
+        {9975541473848.67, 10028452559942.572, 10015182443103.088, 0.0, 9983166874675.307,
+         10051914295039.947, 10001910571055.373, 2e9},
+        {10017503292584.348, 9996803391749.566, 10010220524548.508, 1e10, 10015313871114.201,
+         9981378088876.047, 10036197185984.19, 2e9},
+        {10019078239546.984, 9996002945218.312, 10015990920054.35, 5e9, 10002099684089.418,
+         9995890397452.143, 10025649775267.484, 1e10},
+        {10012528408756.31, 10002349783517.006, 10019742751061.396, 0.0, 10035441338381.84,
+         9980393815464.287, 10039661723758.021, 1e8}};
+    bsp_scene *three = bsp_scene_create();
+    s = bsp_scene_create();
+    for (int i = 0; i < 4; i++) {
+        const double *c = cones[i];
+        REQUIRE(bsp_scene_add_cone(i ? three : s, bsp_v3(c[0], c[1], c[2]), c[3],
+                                   bsp_v3(c[4], c[5], c[6]), c[7], NULL) == BSP_OK);
+    }
+    bsp_ray past_cone = {
+        bsp_v3(-8.454254858589483e16, 3.3320928737430532e16, -4.171832785371414e16),
+        bsp_v3(8.455252435952887e-100, -3.3310898931371493e-100, 4.1728343326990954e-100), 0.0,
+        INFINITY};
+    check_phantom_refused(s, "a line passing a cone", &past_cone);
+
+    s = three;
+    bsp_vec3 quad[4] = {{{10048096929177.414, 9960340842721.18, 10030630247238.717}},
+                        {{10040059441369.086, 9975010313154.787, 10032286510799.906}},
+                        {{10031333183881.158, 9984799189281.895, 10027703488126.867}},
+                        {{10039370671689.484, 9970129718848.287, 10026047224565.68}}};
+    REQUIRE(bsp_scene_add_polygon(s, quad, 4, NULL) == BSP_OK);
+    bsp_ray along_z = {bsp_v3(10028490298211.846, 9988820582109.967, -9.998996753210346e16),
+                       bsp_v3(0, 0, 1e50), 0.0, INFINITY};
+    check_rays_as_naive(s, "three cones and a quad, a long direction", &along_z, 1);
+    bsp_scene_destroy(s);
+
+    /* random triangles; rays from a point of a triangle's plane towards
+     * another, tilted off the plane by 0 to 1e-6 */
+    s = bsp_scene_create();
+    rng = 1717;
+    enum { NT = 200, NR = 4000, NC = 20, NRC = 2000 };
+    bsp_vec3 tv[NT][3];
+    for (int i = 0; i < NT; i++) {
+        bsp_vec3 c = bsp_v3(rnd_in(-4, 4), rnd_in(-4, 4), rnd_in(-4, 4));
+        for (int k = 0; k < 3; k++)
+            tv[i][k] = v3_add(c, bsp_v3(rnd_in(-1, 1), rnd_in(-1, 1), rnd_in(-1, 1)));
+        add_tri(s, tv[i][0], tv[i][1], tv[i][2]);
+    }
+    bsp_ray *rays = malloc(NR * sizeof *rays);
+    REQUIRE(rays);
+    static const double tilt[] = {0.0, 1e-17, 1e-14, 1e-11, 1e-8, 1e-6};
+    for (int i = 0; i < NR; i++) {
+        const bsp_vec3 *v = tv[i % NT];
+        bsp_vec3 e1 = v3_sub(v[1], v[0]), e2 = v3_sub(v[2], v[0]);
+        bsp_vec3 n = v3_normalize(v3_cross(e1, e2));
+        /* plane points by barycentrics in [-2, 3]: inside or outside */
+        bsp_vec3 from =
+            v3_add(v[0], v3_add(v3_scale(e1, rnd_in(-2, 3)), v3_scale(e2, rnd_in(-2, 3))));
+        bsp_vec3 to =
+            v3_add(v[0], v3_add(v3_scale(e1, rnd_in(-0.5, 1)), v3_scale(e2, rnd_in(-0.5, 1))));
+        bsp_vec3 d = v3_sub(to, from);
+        d = v3_add(d, v3_scale(n, v3_length(d) * tilt[i % 6] * (i % 12 < 6 ? 1 : -1)));
+        rays[i] = (bsp_ray){from, d, 0.0, INFINITY};
+    }
+    check_rays_as_naive(s, "rays in triangles' planes", rays, NR);
+    bsp_scene_destroy(s);
+
+    /* random cones; rays tangent to them (through a surface point, along a
+     * direction perpendicular to its normal) */
+    s = bsp_scene_create();
+    bsp_vec3 cb[NC], ca[NC];
+    double cr0[NC], cr1[NC];
+    const double off = 1e4; /* cones far from the origin: a scene scale of 1e4 sizes */
+    for (int i = 0; i < NC; i++) {
+        cb[i] = bsp_v3(off + rnd_in(-4, 4), off + rnd_in(-4, 4), off + rnd_in(-4, 4));
+        ca[i] = v3_add(cb[i], bsp_v3(rnd_in(-3, 3), rnd_in(-3, 3), rnd_in(-3, 3)));
+        cr0[i] = i % 3 == 0 ? 0.0 : rnd_in(0.1, 1);
+        cr1[i] = i % 3 == 1 ? cr0[i] : rnd_in(0.1, 1);
+        REQUIRE(bsp_scene_add_cone(s, cb[i], cr0[i], ca[i], cr1[i], NULL) == BSP_OK);
+    }
+    for (int i = 0; i < NRC; i++) {
+        int c = i % NC;
+        bsp_vec3 ax = v3_sub(ca[c], cb[c]);
+        double len = v3_length(ax);
+        bsp_vec3 a = v3_scale(ax, 1.0 / len);
+        bsp_vec3 u = v3_normalize(v3_cross(a, fabs(a.x) < 0.9 ? bsp_v3(1, 0, 0) : bsp_v3(0, 1, 0)));
+        bsp_vec3 w = v3_cross(a, u);
+        double hh = rnd_in(0, 1), phi = rnd_in(0, 6.283185307179586);
+        bsp_vec3 radial = v3_add(v3_scale(u, cos(phi)), v3_scale(w, sin(phi)));
+        bsp_vec3 p = v3_add(v3_add(cb[c], v3_scale(ax, hh)),
+                            v3_scale(radial, cr0[c] + (cr1[c] - cr0[c]) * hh));
+        /* the surface normal tilts the radial by the slope; a tangent is
+         * perpendicular to it: the circle's tangent, the generator, or a mix */
+        bsp_vec3 gen = v3_normalize(v3_add(ax, v3_scale(radial, cr1[c] - cr0[c])));
+        bsp_vec3 tang = v3_cross(a, radial);
+        double m = rnd_in(-1, 1);
+        bsp_vec3 d = v3_normalize(v3_add(v3_scale(tang, m), v3_scale(gen, 1 - fabs(m))));
+        static const double back[] = {3.0, 1e3, 1e6, 1e8};
+        bsp_vec3 o = v3_sub(p, v3_scale(d, back[i % 4]));
+        rays[i] = (bsp_ray){o, v3_scale(d, i % 8 < 4 ? 1.0 : 1e-90), 0.0, INFINITY};
+    }
+    check_rays_as_naive(s, "rays tangent to cones", rays, NRC);
+    free(rays);
+    bsp_scene_destroy(s);
+}
+
 /* A build that would outgrow max_tree_bytes fails with BSP_ERR_LIMIT and a
  * message naming the limits, instead of running out of memory. Three
  * triangles spanning the same box overlap every cell, so Kaplan's tree grows

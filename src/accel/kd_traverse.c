@@ -123,16 +123,11 @@ start(const kd_tree *t, const bsp_ray *ray, const trav_ray *r, double *en, exit_
     return 1;
 }
 
-/* 1 when RAY lies in the traversal's precision domain (kd_tree.h): the sum
- * of its origin's absolute coordinates (one compare for three; a bound of
- * the largest) at most far_origin, and dot(d, d) within [KD_DIR_DOT_MIN,
- * KD_DIR_DOT_MAX]. NaN propagates into the sum and fails every comparison,
- * so it is outside too. */
-static inline int in_domain(const kd_tree *t, const trav_ray *r)
+/* 1 when RAY lies in the precision domain (scene_internal.h). */
+static inline int in_domain(const bsp_scene *s, const trav_ray *r)
 {
-    double o1 = fabs(r->o[0]) + fabs(r->o[1]) + fabs(r->o[2]);
     double dd = r->d[0] * r->d[0] + r->d[1] * r->d[1] + r->d[2] * r->d[2];
-    return o1 <= t->far_origin && dd >= KD_DIR_DOT_MIN && dd <= KD_DIR_DOT_MAX;
+    return scene_ray_in_domain(s, r->o, dd);
 }
 
 /* Starts a new ray in the mailbox: returns its stamp. */
@@ -287,7 +282,7 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
     trav_ray tr;
     hit->prim = BSP_NO_PRIM;
     trav_ray_init(&tr, ray);
-    if (__builtin_expect(!in_domain(t, &tr), 0))
+    if (__builtin_expect(!in_domain(s, &tr), 0))
         return naive_scene_intersect(s, q, ray, hit);
     if (!start(t, ray, &tr, en, stack))
         return 0;
@@ -297,7 +292,7 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
      * most tmax, so a hit is better than the best so far when its t is
      * smaller or, at equal t, its index is lower. */
     isect_ray r;
-    isect_ray_init(&r, ray);
+    isect_ray_init(&r, ray, s->hit_tol); /* in the domain: checked */
     double tmax = ray->tmax;
     scene_isect_hit best = {INFINITY, 0.0, 0.0, 1.0}, h;
     uint32_t best_p = BSP_NO_PRIM;
@@ -349,14 +344,14 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
     double en[3];
     trav_ray tr;
     trav_ray_init(&tr, ray);
-    if (__builtin_expect(!in_domain(t, &tr), 0))
+    if (__builtin_expect(!in_domain(s, &tr), 0))
         return naive_scene_occluded(s, q, ray);
     if (!start(t, ray, &tr, en, stack))
         return 0;
     uint32_t stamp = mailbox_next(q, s->nprims);
     uint32_t *mbox = q->stamp;
     isect_ray r;
-    isect_ray_init(&r, ray);
+    isect_ray_init(&r, ray, s->hit_tol); /* in the domain: checked */
     const double tmax = ray->tmax;
     scene_isect_hit h;
     int found = 0;

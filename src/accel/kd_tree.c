@@ -19,7 +19,6 @@ int kd_tree_init(kd_tree *t, const bsp_scene *scene, int max_depth, int max_leaf
     t->max_depth = max_depth;
     t->max_leaf_prims = max_leaf_prims;
     t->pad = KD_PAD_REL * scene_scale(scene);
-    t->far_origin = KD_FAR_ORIGIN_REL * scene_scale(scene);
     bsp_box b = bsp_scene_bounds(scene);
     if (!box_is_empty(b)) {
         for (int k = 0; k < 3; k++) {

@@ -30,21 +30,13 @@
 
 #include "accel/accel_internal.h"
 
-/* Bounds padding relative to the scene scale (see the invariant above). */
-#define KD_PAD_REL 1e-7
-/* The precision domain of the traversal: the invariant above needs the
- * rounding error of the points it computes, about 1e-16 (|o| + |d t|), far
- * below the padding. The points lie in the root box, so |d t| <= |o| + the
- * box, and an origin within KD_FAR_ORIGIN_REL scene scales (the sum of its
- * absolute coordinates) keeps the error near 1e-9 scales, 1/100 of the
- * padding; dot(d, d) within
- * [KD_DIR_DOT_MIN, KD_DIR_DOT_MAX] keeps the kernels' products of d with
- * scene coordinates (at most 1e30) clear of overflow and underflow. Other
- * rays (an origin 1e7 scene sizes away, a direction of length 1e-300, NaN)
- * take the naive loop, whose answer is theirs by definition. */
-#define KD_FAR_ORIGIN_REL 1e6
-#define KD_DIR_DOT_MIN 1e-200
-#define KD_DIR_DOT_MAX 1e200
+/* Bounds padding relative to the scene scale (see the invariant above):
+ * 1e-7, four times the kernels' hit check distance (geom/isect.h), which
+ * keeps every hit within a quarter of the padding of its shape; the
+ * traversal's points err by about 1e-9 scales in the precision domain
+ * (scene_internal.h), far less than the rest. (4 x 2.5e-8 rounds to the
+ * double nearest 1e-7: scaling by 4 is exact.) */
+#define KD_PAD_REL (4.0 * ISECT_HIT_TOL_REL)
 
 #define KD_LEAF_TAG 3u
 
@@ -100,7 +92,6 @@ typedef struct kd_tree {
     size_t nprims, cap_prims;
     bsp_box box;    /* root cell: the scene bounds grown by pad */
     double pad;     /* bounds padding used for assignment */
-    double far_origin; /* KD_FAR_ORIGIN_REL times the scene scale */
     int max_depth;  /* the enforced limit (sizes the traversal stack) */
     int max_leaf_prims;
     int box_empty; /* traversal: box is empty (no live primitive), every ray misses;

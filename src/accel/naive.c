@@ -12,7 +12,7 @@
 int naive_scene_intersect(const bsp_scene *s, bsp_query *q, const bsp_ray *ray, bsp_hit *hit)
 {
     isect_ray r;
-    isect_ray_init(&r, ray);
+    scene_isect_ray_init(s, &r, ray);
     double tmax = ray->tmax; /* shrinks to the closest hit so far; t never depends on it */
     scene_isect_hit best = {INFINITY, 0.0, 0.0, 1.0}, h;
     uint32_t best_p = BSP_NO_PRIM;
@@ -38,7 +38,7 @@ int naive_scene_intersect(const bsp_scene *s, bsp_query *q, const bsp_ray *ray, 
 int naive_scene_occluded(const bsp_scene *s, bsp_query *q, const bsp_ray *ray)
 {
     isect_ray r;
-    isect_ray_init(&r, ray);
+    scene_isect_ray_init(s, &r, ray);
     scene_isect_hit h;
     for (uint32_t i = 0; i < (uint32_t)s->nprims; i++) {
         if (s->prims[i].shape == SHAPE_NONE)

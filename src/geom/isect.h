@@ -9,6 +9,17 @@
  * hit, and computes t without reference to tmin/tmax (they only filter), so
  * every caller, whatever its interval, gets the same t bit for bit. The
  * contract of shapes.h holds for each kernel.
+ *
+ * Hit check: where a kernel's arithmetic can be ill-conditioned (a
+ * triangle's Möller–Trumbore test for a ray almost in its plane, a cone's
+ * quadratic), it accepts a root only when the ray's point at that t lies
+ * within ray->tol of the shape. Without it a ray in a triangle's plane "hit"
+ * the triangle at t = 0, a triangle-width outside it, and a cone was "hit"
+ * by a line that misses it: phantoms that no kd-tree lists where they lie
+ * (kd_tree.h needs every hit within its padding of the shape). The test is
+ * part of the kernel, so every method applies it alike. Spheres and
+ * polygons need none: a sphere's roots come from the stable formula and the
+ * centre-to-line offset, a polygon's inside test runs on the computed point.
  */
 #ifndef BSPRAY_GEOM_ISECT_H
 #define BSPRAY_GEOM_ISECT_H
@@ -27,14 +38,23 @@ typedef struct isect_ray {
     bsp_vec3 org, dir;
     double dd;   /* dot(dir, dir) */
     double tmin; /* accepted t: tmin <= t <= tmax (closed) */
+    double tol;  /* the hit check's distance (above); INFINITY: no check */
 } isect_ray;
 
-static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray)
+/* The hit check's distance relative to the scene scale (scene_internal.h):
+ * a quarter of the kd-tree's padding (kd_tree.h defines the padding as four
+ * times this), leaving room for the traversal's rounding. Far above the rounding
+ * of a well-conditioned hit (about 1e-9 scales at the far end of the
+ * precision domain), so no real hit fails it. */
+#define ISECT_HIT_TOL_REL 2.5e-8
+
+static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray, double tol)
 {
     r->org = ray->org;
     r->dir = ray->dir;
     r->dd = v3_dot(ray->dir, ray->dir);
     r->tmin = ray->tmin;
+    r->tol = tol;
 }
 
 /* The roots t0 <= t1 of a t^2 + 2 b t + c = 0 given disc = b^2 - a c >= 0
@@ -113,6 +133,19 @@ ISECT_INLINE int triangle_isect(const triangle_shape *tr, const isect_ray *ray, 
     double tt = bt / det;
     if (!(tt >= ray->tmin && tt <= tmax))
         return 0;
+    /* The hit check: Cramer's rule makes det tvec + bt dir - bu e1 - bv e2
+     * vanish (o + t d = v0 + u e1 + v e2); its residual over det is the
+     * distance, per axis, between the ray's point at t and the point of the
+     * triangle at (u, v). Rounding adds about 1e-16 (|tvec| + |t d| + |e1| +
+     * |e2|) to that, far below tol in the precision domain; a ray almost in
+     * the plane leaves det as rounding noise and a large residual. (NaN,
+     * outside the domain, passes: those queries take no check.) */
+    const double lim = det * ray->tol;
+    for (int k = 0; k < 3; k++) {
+        double res = det * tvec.v[k] + bt * ray->dir.v[k] - bu * tr->e1.v[k] - bv * tr->e2.v[k];
+        if (fabs(res) > lim)
+            return 0;
+    }
     *t = tt;
     *bu_out = bu;
     *bv_out = bv;
@@ -221,12 +254,29 @@ ISECT_INLINE int polygon_isect(const polygon_shape *p, const bsp_vec3 *verts,
 
 /* --- cone (see cone.c) ------------------------------------------------------ */
 
-ISECT_INLINE int cone_valid_root(const cone_shape *c, const isect_ray *ray, double tmax, double h0,
-                                 double hd, double t)
+/* The hit check for a cone: the ray's point at T (OC = org - base) lies
+ * within ray->tol of the lateral surface — the distance along the axis past
+ * an end plus the radial distance from that end's (or its own height's)
+ * circle. A line that misses the cone by a hair can leave a discriminant of
+ * rounding noise and a root anywhere along it. */
+ISECT_INLINE int cone_near_surface(const cone_shape *c, const isect_ray *ray, bsp_vec3 oc, double t)
+{
+    if (!(ray->tol < INFINITY))
+        return 1;
+    bsp_vec3 p = v3_madd(oc, ray->dir, t);
+    double h = v3_dot(p, c->axis);
+    double hc = h < 0.0 ? 0.0 : h > c->length ? c->length : h;
+    bsp_vec3 perp = v3_madd(p, c->axis, -h);
+    double off = sqrt(v3_dot(perp, perp)) - (c->base_radius + c->slope * hc);
+    return fabs(off) + fabs(h - hc) <= ray->tol;
+}
+
+ISECT_INLINE int cone_valid_root(const cone_shape *c, const isect_ray *ray, double tmax,
+                                 bsp_vec3 oc, double h0, double hd, double t)
 {
     double h = h0 + t * hd;
     return h >= 0.0 && h <= c->length && c->base_radius + c->slope * h >= 0.0 && t >= ray->tmin &&
-           t <= tmax;
+           t <= tmax && cone_near_surface(c, ray, oc, t);
 }
 
 ISECT_INLINE int cone_isect(const cone_shape *c, const isect_ray *ray, double tmax, double *t)
@@ -251,11 +301,11 @@ ISECT_INLINE int cone_isect(const cone_shape *c, const isect_ray *ray, double tm
             return 0;
         quadratic_roots(qa, qb, qc, disc, &t0, &t1);
     }
-    if (cone_valid_root(c, ray, tmax, h0, hd, t0)) {
+    if (cone_valid_root(c, ray, tmax, oc, h0, hd, t0)) {
         *t = t0;
         return 1;
     }
-    if (cone_valid_root(c, ray, tmax, h0, hd, t1)) {
+    if (cone_valid_root(c, ray, tmax, oc, h0, hd, t1)) {
         *t = t1;
         return 1;
     }

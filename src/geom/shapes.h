@@ -4,7 +4,9 @@
  *
  * The *_intersect functions are out-of-line wrappers of the inline kernels in
  * geom/isect.h, which the intersection loops of every method use directly;
- * both compute the same t, bit for bit.
+ * both compute the same t, bit for bit. The wrappers skip the kernels' hit
+ * check (isect.h), whose distance is relative to the scene's scale; a
+ * scene's queries (scene_isect) apply it.
  *
  * Contract shared by every *_intersect:
  *   - returns 1 and writes *t when the shape is hit at some t with

@@ -51,6 +51,7 @@ bsp_scene *bsp_scene_create(void)
     s->materials[0] = default_material;
     s->nmaterials = 1;
     s->bounds = box_empty();
+    scene_update_scale(s);
     return s;
 }
 
@@ -145,6 +146,7 @@ static bsp_status push_prim(bsp_scene *s, bsp_prim_kind kind, shape_kind shape, 
     } else {
         s->kind_count[kind]++;
         s->bounds = box_union(s->bounds, bsp_scene_prim_bounds(s, s->nprims - 1));
+        scene_update_scale(s);
     }
     return BSP_OK;
 }
@@ -455,6 +457,13 @@ double scene_scale(const bsp_scene *s)
         }
     }
     return scale;
+}
+
+void scene_update_scale(bsp_scene *s)
+{
+    double scale = scene_scale(s);
+    s->far_origin = RAY_FAR_ORIGIN_REL * scale;
+    s->hit_tol = ISECT_HIT_TOL_REL * scale;
 }
 
 size_t bsp_scene_kind_count(const bsp_scene *s, bsp_prim_kind kind)

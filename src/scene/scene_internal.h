@@ -13,6 +13,7 @@
 #ifndef BSPRAY_SCENE_INTERNAL_H
 #define BSPRAY_SCENE_INTERNAL_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -93,6 +94,9 @@ struct bsp_scene {
     double background[3];
 
     bsp_box bounds; /* of the live primitives */
+    /* from scene_scale, kept with bounds (scene_update_scale): */
+    double far_origin; /* RAY_FAR_ORIGIN_REL scales: the precision domain */
+    double hit_tol;    /* ISECT_HIT_TOL_REL scales: the kernels' hit check */
 
     char *warnings[SCENE_MAX_WARNINGS];
     size_t nwarnings;
@@ -132,6 +136,43 @@ HIDDEN void scene_set_source(bsp_scene *s, const char *name, size_t line);
 /* The scene's scale: the largest absolute coordinate of its bounds, at least
  * 1. Offsets for secondary rays and kd-tree padding are relative to it. */
 HIDDEN double scene_scale(const bsp_scene *s);
+/* Sets far_origin and hit_tol from the scale (after bounds change). */
+HIDDEN void scene_update_scale(bsp_scene *s);
+
+/* The precision domain of exact queries. Exactness of the kd-trees
+ * (kd_tree.h) needs the rounding error of the points they compute, about
+ * 1e-16 (|o| + |d t|), far below their padding. The points lie in the root
+ * box, so |d t| <= |o| + the box, and an origin within RAY_FAR_ORIGIN_REL
+ * scene scales (the sum of its absolute coordinates) keeps the error near
+ * 1e-9 scales, 1/100 of the padding; dot(d, d) within [RAY_DIR_DOT_MIN,
+ * RAY_DIR_DOT_MAX] keeps the kernels' products of d with scene coordinates
+ * (at most 1e30) clear of overflow and underflow. Rays outside (an origin
+ * 1e7 scene sizes away, a direction of length 1e-300, NaN) are answered by
+ * the naive loop without the kernels' hit check, whose distance would be
+ * below their rounding error there. */
+#define RAY_FAR_ORIGIN_REL 1e6
+#define RAY_DIR_DOT_MIN 1e-200
+#define RAY_DIR_DOT_MAX 1e200
+
+/* 1 when the ray from O with dot(d, d) = DD lies in S's precision domain:
+ * the sum of O's absolute coordinates (one compare for three; a bound of
+ * the largest) at most far_origin, DD within [RAY_DIR_DOT_MIN,
+ * RAY_DIR_DOT_MAX]. NaN propagates into the sum and fails every comparison,
+ * so it is outside too. */
+static inline int scene_ray_in_domain(const bsp_scene *s, const double o[3], double dd)
+{
+    double o1 = fabs(o[0]) + fabs(o[1]) + fabs(o[2]);
+    return o1 <= s->far_origin && dd >= RAY_DIR_DOT_MIN && dd <= RAY_DIR_DOT_MAX;
+}
+
+/* The kernels' view of RAY for queries on S: with the hit check in the
+ * precision domain, without it outside. */
+static inline void scene_isect_ray_init(const bsp_scene *s, isect_ray *r, const bsp_ray *ray)
+{
+    isect_ray_init(r, ray, INFINITY);
+    if (scene_ray_in_domain(s, ray->org.v, r->dd))
+        r->tol = s->hit_tol;
+}
 
 /* Reads an NFF file (plain or gzip): bsp_scene_load without the dispatch. */
 HIDDEN bsp_status nff_load_file(const char *path, bsp_scene **out, bsp_error *err);
@@ -193,7 +234,7 @@ static inline int scene_intersect(const bsp_scene *s, uint32_t prim, const bsp_r
                                   bsp_hit *hit)
 {
     isect_ray r;
-    isect_ray_init(&r, ray);
+    scene_isect_ray_init(s, &r, ray);
     scene_isect_hit h;
     if (!scene_isect(s, prim, &r, ray->tmax, &h))
         return 0;
