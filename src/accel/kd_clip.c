@@ -499,3 +499,58 @@ int kd_clip_prim_split(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
     }
     return got;
 }
+
+/* Whether the segment A-B meets the closed box G (slab clipping of its
+ * parameter range [0, 1]). */
+static int segment_meets_box(bsp_vec3 a, bsp_vec3 b, const bsp_box *g)
+{
+    double t0 = 0.0, t1 = 1.0;
+    for (int k = 0; k < 3; k++) {
+        double d = b.v[k] - a.v[k];
+        if (d == 0.0) {
+            if (a.v[k] < g->lo.v[k] || a.v[k] > g->hi.v[k])
+                return 0;
+            continue;
+        }
+        double ta = (g->lo.v[k] - a.v[k]) / d, tb = (g->hi.v[k] - a.v[k]) / d;
+        t0 = dmax(t0, dmin(ta, tb));
+        t1 = dmin(t1, dmax(ta, tb));
+        if (t0 > t1)
+            return 0;
+    }
+    return 1;
+}
+
+/* The polygon's hits meet G either along its outline (an edge meets G) or,
+ * when no edge does, with all of G's cross-section by the plane (a convex
+ * set the outline does not cross lies wholly inside or wholly outside):
+ * then one point of that cross-section — the mean of the points where G's
+ * edges meet the plane — decides, by the even-odd test of the hits. */
+int kd_polygon_meets_box(const bsp_scene *scene, uint32_t prim, const bsp_box *g)
+{
+    const polygon_shape *p = &scene->polygons[scene->prims[prim].slot];
+    const bsp_vec3 *v = scene->plane_verts + p->first;
+    for (uint32_t i = 0; i < p->count; i++)
+        if (segment_meets_box(v[i], v[i + 1 < p->count ? i + 1 : 0], g))
+            return 1;
+    bsp_vec3 sum = bsp_v3(0.0, 0.0, 0.0);
+    int n = 0;
+    for (int e = 0; e < 12; e++) { /* the 4 edges of G along each axis k */
+        int k = e / 4, j = (k + 1) % 3, l = (k + 2) % 3;
+        bsp_vec3 a, b;
+        a.v[j] = b.v[j] = e & 1 ? g->hi.v[j] : g->lo.v[j];
+        a.v[l] = b.v[l] = e & 2 ? g->hi.v[l] : g->lo.v[l];
+        a.v[k] = g->lo.v[k];
+        b.v[k] = g->hi.v[k];
+        double fa = v3_dot(p->normal, a) - p->d, fb = v3_dot(p->normal, b) - p->d;
+        if (fa == 0.0 || fb == 0.0 || (fa < 0.0) != (fb < 0.0)) {
+            double t = fa == fb ? 0.0 : fa / (fa - fb);
+            sum = v3_add(sum, v3_madd(a, v3_sub(b, a), t));
+            n++;
+        }
+    }
+    if (n == 0)
+        return 0; /* the plane misses G */
+    bsp_vec3 c = v3_scale(sum, 1.0 / n);
+    return polygon_contains_2d(v, p->count, p->axis_u, p->axis_v, c.v[p->axis_u], c.v[p->axis_v]);
+}

@@ -52,6 +52,17 @@ HIDDEN int kd_clip_prim_split(const bsp_scene *scene, uint32_t prim, bsp_box pb,
                               const bsp_box *cell, unsigned axis, double s, double pad,
                               kd_clip_scratch *scr, bsp_box out[2]);
 
+/* Whether the hits of polygon PRIM (its vertices moved onto its plane,
+ * even-odd inside) meet the closed box B: exactly, up to rounding, where
+ * clipping gives only bounds of a superset. Clipping a concave or
+ * self-crossing polygon leaves zero-width "bridges" along the clipping
+ * planes, and a later plane can cut a bridge where the polygon is not: the
+ * builder, which clips along the path from the root, and the checker, which
+ * clips the whole polygon to a leaf, can then disagree about a leaf neither
+ * needs. The checker (kd_tree_check) asks this before it calls an unlisted
+ * polygon an error. */
+HIDDEN int kd_polygon_meets_box(const bsp_scene *scene, uint32_t prim, const bsp_box *b);
+
 /* The checker (kd_tree_check) asks for a primitive in every leaf its bounds
  * clipped with this fraction of the tree's padding overlap: the builder clips
  * with the whole padding, so its assignment is a superset with a margin of
