@@ -266,9 +266,15 @@ ISECT_INLINE int cone_near_surface(const cone_shape *c, const isect_ray *ray, bs
     bsp_vec3 p = v3_madd(oc, ray->dir, t);
     double h = v3_dot(p, c->axis);
     double hc = h < 0.0 ? 0.0 : h > c->length ? c->length : h;
+    double e = ray->tol - fabs(h - hc); /* what is left for the radial distance */
+    if (!(e >= 0.0))
+        return 0;
+    /* |rho - r| <= e by squares (no square root: it would lengthen the
+     * dependency chain of every accepted hit) */
     bsp_vec3 perp = v3_madd(p, c->axis, -h);
-    double off = sqrt(v3_dot(perp, perp)) - (c->base_radius + c->slope * hc);
-    return fabs(off) + fabs(h - hc) <= ray->tol;
+    double rho2 = v3_dot(perp, perp), r = c->base_radius + c->slope * hc;
+    double lo = r - e, hi = r + e;
+    return rho2 <= hi * hi && (lo <= 0.0 || rho2 >= lo * lo);
 }
 
 ISECT_INLINE int cone_valid_root(const cone_shape *c, const isect_ray *ray, double tmax,
