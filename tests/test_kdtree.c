@@ -650,16 +650,19 @@ static void check_phantom_refused(bsp_scene *s, const char *name, const bsp_ray 
 
 /* Rays for which a kernel's arithmetic is ill-conditioned: a ray (almost) in
  * a triangle's plane leaves Moller-Trumbore's determinant as rounding noise,
- * and a line passing a cone by a hair its discriminant; the naive method
- * "hit" such shapes where they are not, and no tree lists them there. The
- * kernels' hit check (geom/isect.h) refuses a hit whose point is not on the
- * shape. The fuzzer's three cases (answers known independently: the first
- * ray starts outside the triangle's bounds, so t = 0 is no hit; the
- * second's line misses the cone, its exact discriminant being -7.75e-181),
- * then 4,000 rays in or within a hair of random triangles' planes and 2,000
- * rays tangent to random cones 10^4 sizes from the origin (origins up to
- * 10^8 sizes back, direction lengths 1 and 1e-90), against every tree.
- * Without the check every part fails. */
+ * a line passing a cone by a hair its discriminant, a tangent from a
+ * sphere's surface both b and c; the naive method "hit" such shapes where
+ * they are not, and no tree lists them there. The kernels' hit check
+ * (geom/isect.h) refuses a hit whose point is not on the shape, and solves
+ * again from near the shape where a real hit's point errs (thin triangles
+ * and cones seen from far away). The fuzzer's cases (answers known
+ * independently: the first ray starts outside the triangle's bounds, so
+ * t = 0 is no hit; the second's line misses the cone, its exact
+ * discriminant being -7.75e-181; the far-away hits' exact t; the tangent's
+ * true crossings at +-1.1e-8), then 4,000 rays in or within a hair of random
+ * triangles' planes and 2,000 rays tangent to random cones 10^4 sizes from
+ * the origin (origins up to 10^8 sizes back, direction lengths 1 and
+ * 1e-90), against every tree. Without the change every part fails. */
 TEST(kd_exact_ill_conditioned_hits)
 {
     bsp_scene *s = bsp_scene_create();
@@ -703,6 +706,66 @@ TEST(kd_exact_ill_conditioned_hits)
                        bsp_v3(0, 0, 1e50), 0.0, INFINITY};
     check_rays_as_naive(s, "three cones and a quad, a long direction", &along_z, 1);
     bsp_scene_destroy(s);
+
+    /* real hits from far away (10^3 to 10^5 scene scales, inside the
+     * precision domain), which the direct solution places off the shape by
+     * more than the check allows: the careful path (from a point of the ray
+     * near the shape) must find them. Exact t by hand or from the fuzzer's
+     * 120-digit solution. */
+    static const struct {
+        double v[9]; /* a triangle, or a cone's base, radius, apex, radius */
+        int cone;
+        bsp_ray ray;
+        double t; /* the exact t */
+    } far[] = {{{0, 0, 0, 1, 0, 0, 0.5, 1e-6, 0},
+                0, /* sine 2e-6, from 3000 scales */
+                {{{-846.1487815452376, -564.4325207301584, -2822.162605150792}},
+                 {{0.2822162605150792, 0.18814417367671948, 0.9407208683835974}},
+                 0.0,
+                 INFINITY},
+                2999.99999999999983},
+               {{0, 0, 0, 1, 0, 0, 0.5, 5e-4, 0},
+                0, /* aspect 2000, from 7.9e5 scales */
+                {{{-204639.34313388338, 162771.991821383, -426178.0756908836}},
+                 {{0.4092799849991043, -0.32554398332759094, 0.8523561513817672}},
+                 0.0,
+                 INFINITY},
+                500000.0000000000019},
+               {{0, 0, 0, 1, 0, 0, 2, 0.5, 0},
+                1, /* a cone crossed 0.3 from its axis */
+                {{{-100000, 0.3, 1.1}}, {{1, 0, 0}}, 0.0, INFINITY},
+                99999.33998106087779},
+               {{0, 0, 0, 1, 0, 0, 2, 1, 0},
+                1, /* a cylinder: x = -sqrt(1 - 0.09) */
+                {{{-100000, 0.3, 1.1}}, {{1, 0, 0}}, 0.0, INFINITY},
+                99999.046060798583}};
+    for (size_t i = 0; i < sizeof far / sizeof far[0]; i++) {
+        const double *v = far[i].v;
+        s = bsp_scene_create();
+        if (far[i].cone)
+            REQUIRE(bsp_scene_add_cone(s, bsp_v3(v[0], v[1], v[2]), v[3], bsp_v3(v[4], v[5], v[6]),
+                                       v[7], NULL) == BSP_OK);
+        else
+            add_tri(s, bsp_v3(v[0], v[1], v[2]), bsp_v3(v[3], v[4], v[5]),
+                    bsp_v3(v[6], v[7], v[8]));
+        bsp_hit h;
+        int hit = bsp_scene_intersect_prim(s, 0, &far[i].ray, &h);
+        CHECK_MSG(hit && fabs(h.t - far[i].t) <= 1e-9 * far[i].t, "far hit %zu: %d, t %.17g", i,
+                  hit, hit ? h.t : 0.0);
+        check_rays_as_naive(s, "a real hit from far away", &far[i].ray, 1);
+        bsp_scene_destroy(s);
+    }
+
+    /* a ray from a sphere's surface along its tangent: the root c / q of
+     * two rounding noises lay 3 radii out on the tangent (at t = 4); the
+     * line's true crossings are at t = +-1.1e-8, outside the window [3, 5] */
+    s = bsp_scene_create();
+    add_sphere(s, bsp_v3(0, 0, 0), 1);
+    bsp_ray tangent = {{{0.23807778500299387, 0.6873330062964043, -0.6862159330295495}},
+                       {{-0.8400517590532517, -0.20888821184203243, -0.5006782969781851}},
+                       3.0,
+                       5.0};
+    check_phantom_refused(s, "a tangent from a sphere's surface", &tangent);
 
     /* random triangles; rays from a point of a triangle's plane towards
      * another, tilted off the plane by 0 to 1e-6 */

@@ -238,10 +238,10 @@ void bsp_query_reset_counters(bsp_query *query);
  * shorter than 1e-100 or longer than 1e100, where its traversal could not
  * place points to within its padding. A hit is reported only where the
  * ray's point at t lies on the primitive (to within 2.5e-8 scene scales):
- * a ray almost in a triangle's plane, or a line passing a cone by a hair,
- * can make the intersection arithmetic claim a hit elsewhere, and every
- * method refuses it alike (outside the range above no such check is made).
- * t is measured in lengths of the
+ * a ray almost in a triangle's plane, a line passing a cone by a hair or a
+ * tangent from a sphere's surface can make the intersection arithmetic
+ * claim a hit elsewhere, and every method refuses it alike (outside the
+ * range above no such check is made). t is measured in lengths of the
  * direction: keep |dir| within [1e-100, 1e100] (and the origin within the
  * scene coordinates' range), or a hit's t can overflow to inf (`bspray trace`
  * refuses such rays). */

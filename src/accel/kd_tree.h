@@ -17,8 +17,10 @@
  * primitive clipped to the padded cell, then padded; kd_clip.c). A primitive
  * lies at least `pad` inside its padded bounds, so it is listed in every
  * leaf whose closed box it touches — in both children when it lies in a
- * splitting plane — and the padding (KD_PAD_REL times the scene scale) is far
- * larger than the rounding error of any computed hit point or t. So a
+ * splitting plane — and the padding (KD_PAD_REL times the scene scale) is
+ * four times the distance from its primitive within which every accepted hit
+ * lies (the kernels' hit check, geom/isect.h), and far larger than the
+ * rounding error of the points the traversal computes. So a
  * traversal that tests the primitives of every leaf the ray's segment passes
  * through, and stops only once the closest hit lies inside the current cell,
  * returns what the naive method returns, ties included.

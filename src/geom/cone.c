@@ -36,6 +36,8 @@ int cone_setup(cone_shape *c, bsp_vec3 base, double base_radius, bsp_vec3 apex,
     c->base_radius = r0;
     c->apex_radius = r1;
     c->slope = slope;
+    double rmax = r0 > r1 ? r0 : r1;
+    c->far2 = CONE_NEAR_SIZES * CONE_NEAR_SIZES * (len * len + rmax * rmax);
     c->inside_only = base_radius < 0.0 || apex_radius < 0.0;
     return 1;
 }

@@ -10,16 +10,18 @@
  * every caller, whatever its interval, gets the same t bit for bit. The
  * contract of shapes.h holds for each kernel.
  *
- * Hit check: where a kernel's arithmetic can be ill-conditioned (a
- * triangle's Möller–Trumbore test for a ray almost in its plane, a cone's
- * quadratic), it accepts a root only when the ray's point at that t lies
- * within ray->tol of the shape. Without it a ray in a triangle's plane "hit"
- * the triangle at t = 0, a triangle-width outside it, and a cone was "hit"
- * by a line that misses it: phantoms that no kd-tree lists where they lie
- * (kd_tree.h needs every hit within its padding of the shape). The test is
- * part of the kernel, so every method applies it alike. Spheres and
- * polygons need none: a sphere's roots come from the stable formula and the
- * centre-to-line offset, a polygon's inside test runs on the computed point.
+ * Hit check: the triangle, sphere and cone kernels accept a root only when
+ * the ray's point at that t lies within ray->tol of the shape. Without it a
+ * ray in a triangle's plane "hit" the triangle at t = 0, a triangle-width
+ * outside it, a line that misses a cone "hit" it, and a tangent from a
+ * sphere's surface "hit" the sphere three radii out: phantoms that no
+ * kd-tree lists where they lie (kd_tree.h needs every hit within its padding
+ * of the shape). The test is part of the kernel, so every method applies it
+ * alike. Where a real hit's point can err by more than tol (a thin triangle
+ * or a cone seen from far away), the kernel solves from a point of the ray
+ * near the shape instead (triangle_isect_near, cone_isect), decided by the
+ * ray and the shape alone, never by tmin/tmax. Polygons need no check: the
+ * inside test runs on the computed point.
  */
 #ifndef BSPRAY_GEOM_ISECT_H
 #define BSPRAY_GEOM_ISECT_H
@@ -73,7 +75,29 @@ static inline void quadratic_roots(double a, double b, double c, double disc, do
     *t1 = r0 > r1 ? r0 : r1;
 }
 
+/* Whether a point at squared distance RHO2 from a centre (or an axis) lies
+ * within E of the sphere (or circle) of radius R: |rho - r| <= e by
+ * squares, without a square root on the hit's dependency chain. */
+static inline int isect_near_radius(double rho2, double r, double e)
+{
+    double lo = r - e, hi = r + e;
+    return rho2 <= hi * hi && (lo <= 0.0 || rho2 >= lo * lo);
+}
+
 /* --- sphere (see sphere.c for the numerics) ------------------------------ */
+
+/* The hit check for a sphere: the ray's point at T (OC = org - centre) lies
+ * within ray->tol of the surface. A ray starting on the surface along a
+ * tangent has b and c both rounding noise, and the root c / q anywhere on
+ * the tangent line. */
+ISECT_INLINE int sphere_near_surface(const sphere_shape *s, const isect_ray *ray, bsp_vec3 oc,
+                                     double t)
+{
+    if (!(ray->tol < INFINITY))
+        return 1;
+    bsp_vec3 p = v3_madd(oc, ray->dir, t);
+    return isect_near_radius(v3_dot(p, p), s->radius, ray->tol);
+}
 
 ISECT_INLINE int sphere_isect(const sphere_shape *s, const isect_ray *ray, double tmax, double *t)
 {
@@ -91,11 +115,11 @@ ISECT_INLINE int sphere_isect(const sphere_shape *s, const isect_ray *ray, doubl
 
     double t0, t1;
     quadratic_roots(a, b, c, disc, &t0, &t1);
-    if (t0 >= ray->tmin && t0 <= tmax) {
+    if (t0 >= ray->tmin && t0 <= tmax && sphere_near_surface(s, ray, oc, t0)) {
         *t = t0;
         return 1;
     }
-    if (t1 >= ray->tmin && t1 <= tmax) {
+    if (t1 >= ray->tmin && t1 <= tmax && sphere_near_surface(s, ray, oc, t1)) {
         *t = t1;
         return 1;
     }
@@ -104,17 +128,19 @@ ISECT_INLINE int sphere_isect(const sphere_shape *s, const isect_ray *ray, doubl
 
 /* --- triangle (Möller–Trumbore; see triangle.c) --------------------------- */
 
-/* On a hit also writes the unnormalised barycentrics and the (positive)
- * determinant: u = *bu / *det, v = *bv / *det, computed only for the final
- * hit by triangle_uv. */
-ISECT_INLINE int triangle_isect(const triangle_shape *tr, const isect_ray *ray, double tmax,
-                                double *t, double *bu_out, double *bv_out, double *det_out)
+/* Möller–Trumbore for the ray from ORG (the ray's origin, or a point of it
+ * TS further on, SHIFTED) to the triangle, as triangle_isect describes;
+ * returns 1 on a hit, 0 on a miss, and -1 when a hit fails only the hit
+ * check. */
+ISECT_INLINE int triangle_solve(const triangle_shape *tr, const isect_ray *ray, bsp_vec3 org,
+                                double ts, const int shifted, double tmax, double *t,
+                                double *bu_out, double *bv_out, double *det_out)
 {
     bsp_vec3 pvec = v3_cross(ray->dir, tr->e2);
     double det = v3_dot(tr->e1, pvec);
     if (det == 0.0)
         return 0;
-    bsp_vec3 tvec = v3_sub(ray->org, tr->v0);
+    bsp_vec3 tvec = v3_sub(org, tr->v0);
     double bu = v3_dot(tvec, pvec);
     /* det's sign decides the orientation; test u early (no qvec needed) */
     if (det < 0.0 ? !(bu <= 0.0 && bu >= det) : !(bu >= 0.0 && bu <= det))
@@ -130,27 +156,60 @@ ISECT_INLINE int triangle_isect(const triangle_shape *tr, const isect_ray *ray, 
     }
     if (!(bv >= 0.0 && bu + bv <= det))
         return 0;
-    double tt = bt / det;
-    if (!(tt >= ray->tmin && tt <= tmax))
-        return 0;
-    /* The hit check: Cramer's rule makes det tvec + bt dir - bu e1 - bv e2
-     * vanish (o + t d = v0 + u e1 + v e2); its residual over det is the
-     * distance, per axis, between the ray's point at t and the point of the
+    /* The hit check, before the interval: whether the careful path runs
+     * must not depend on tmin/tmax, or a closest-hit loop (whose tmax
+     * follows the best hit) would see another t than a loop with another
+     * tmax. Cramer's rule makes det tvec + bt dir - bu e1 - bv e2 vanish
+     * (org + (bt / det) d = v0 + u e1 + v e2); its residual over det is the
+     * distance, per axis, between the ray's point and the point of the
      * triangle at (u, v). Rounding adds about 1e-16 (|tvec| + |t d| + |e1| +
-     * |e2|) to that, far below tol in the precision domain; a ray almost in
-     * the plane leaves det as rounding noise and a large residual. (NaN,
-     * outside the domain, passes: those queries take no check.) */
+     * |e2|) to that; a ray almost in the plane leaves det as rounding noise
+     * and a large residual. (NaN, outside the domain, passes: those queries
+     * take no check.) */
     const double lim = det * ray->tol;
     for (int k = 0; k < 3; k++) {
         double res = det * tvec.v[k] + bt * ray->dir.v[k] - bu * tr->e1.v[k] - bv * tr->e2.v[k];
         if (fabs(res) > lim)
-            return 0;
+            return -1;
     }
+    double tt = shifted ? ts + bt / det : bt / det;
+    if (!(tt >= ray->tmin && tt <= tmax))
+        return 0;
     *t = tt;
     *bu_out = bu;
     *bv_out = bv;
     *det_out = det;
     return 1;
+}
+
+/* The careful path, for a hit of the direct solution that failed the hit
+ * check: the ray's origin moved along it to the point nearest v0, so that
+ * tvec is about the triangle's size rather than the origin's distance. From
+ * far away (10^3 scene scales and more) the direct solution's point errs by
+ * 1e-16 |o - v0| / sine (the sine of the angle at v0) and a thin triangle's
+ * real hit fails the check; from the near point it passes. A phantom fails
+ * here too: its determinant is noise whatever the origin. Not inlined: taken
+ * only after a failed check. */
+static __attribute__((noinline, unused)) int triangle_isect_near(const triangle_shape *tr,
+                                                                 const isect_ray *ray, double tmax,
+                                                                 double *t, double *bu_out,
+                                                                 double *bv_out, double *det_out)
+{
+    double ts = v3_dot(v3_sub(tr->v0, ray->org), ray->dir) / ray->dd;
+    bsp_vec3 org = v3_madd(ray->org, ray->dir, ts);
+    return triangle_solve(tr, ray, org, ts, 1, tmax, t, bu_out, bv_out, det_out) == 1;
+}
+
+/* On a hit also writes the unnormalised barycentrics and the (positive)
+ * determinant: u = *bu / *det, v = *bv / *det, computed only for the final
+ * hit by triangle_uv. */
+ISECT_INLINE int triangle_isect(const triangle_shape *tr, const isect_ray *ray, double tmax,
+                                double *t, double *bu_out, double *bv_out, double *det_out)
+{
+    int r = triangle_solve(tr, ray, ray->org, 0.0, 0, tmax, t, bu_out, bv_out, det_out);
+    if (__builtin_expect(r < 0, 0))
+        return triangle_isect_near(tr, ray, tmax, t, bu_out, bv_out, det_out);
+    return r;
 }
 
 ISECT_INLINE void triangle_uv(double bu, double bv, double det, double *u, double *v)
@@ -256,9 +315,9 @@ ISECT_INLINE int polygon_isect(const polygon_shape *p, const bsp_vec3 *verts,
 
 /* The hit check for a cone: the ray's point at T (OC = org - base) lies
  * within ray->tol of the lateral surface — the distance along the axis past
- * an end plus the radial distance from that end's (or its own height's)
- * circle. A line that misses the cone by a hair can leave a discriminant of
- * rounding noise and a root anywhere along it. */
+ * an end plus the radial distance from the circle at its height (past an
+ * end: that end's). A line that misses the cone by a hair can leave a
+ * discriminant of rounding noise and a root anywhere along it. */
 ISECT_INLINE int cone_near_surface(const cone_shape *c, const isect_ray *ray, bsp_vec3 oc, double t)
 {
     if (!(ray->tol < INFINITY))
@@ -269,25 +328,46 @@ ISECT_INLINE int cone_near_surface(const cone_shape *c, const isect_ray *ray, bs
     double e = ray->tol - fabs(h - hc); /* what is left for the radial distance */
     if (!(e >= 0.0))
         return 0;
-    /* |rho - r| <= e by squares (no square root: it would lengthen the
-     * dependency chain of every accepted hit) */
     bsp_vec3 perp = v3_madd(p, c->axis, -h);
-    double rho2 = v3_dot(perp, perp), r = c->base_radius + c->slope * hc;
-    double lo = r - e, hi = r + e;
-    return rho2 <= hi * hi && (lo <= 0.0 || rho2 >= lo * lo);
+    return isect_near_radius(v3_dot(perp, perp), c->base_radius + c->slope * hc, e);
 }
 
-ISECT_INLINE int cone_valid_root(const cone_shape *c, const isect_ray *ray, double tmax,
-                                 bsp_vec3 oc, double h0, double hd, double t)
+/* Root T of the cone's quadratic (for the origin OC = org - base, TS along
+ * the ray): whether it is a hit in [tmin, TMAX] (the final t, TS + T, in
+ * *OUT). */
+ISECT_INLINE int cone_root(const cone_shape *c, const isect_ray *ray, double tmax, bsp_vec3 oc,
+                           double h0, double hd, double ts, double t, double *out)
 {
     double h = h0 + t * hd;
-    return h >= 0.0 && h <= c->length && c->base_radius + c->slope * h >= 0.0 && t >= ray->tmin &&
-           t <= tmax && cone_near_surface(c, ray, oc, t);
+    double tt = ts + t;
+    if (!(h >= 0.0 && h <= c->length && c->base_radius + c->slope * h >= 0.0 && tt >= ray->tmin &&
+          tt <= tmax && cone_near_surface(c, ray, oc, t)))
+        return 0;
+    *out = tt;
+    return 1;
 }
 
+/* An origin farther from the cone's base than this many times its size
+ * (length and largest radius; cone_shape.far2) is moved along the ray first
+ * (below). */
+#define CONE_NEAR_SIZES 8.0
+
+/* From an origin far from the cone (over CONE_NEAR_SIZES sizes from its
+ * base) the quadratic is solved from the point of the ray nearest the
+ * cone's middle (TS along it): from 10^4 scene scales away its constant
+ * term |po|^2 - ro^2 would lose 1e-16 |o|^2 to rounding and a real hit's
+ * root err by far more than the hit check allows; from the near point the
+ * terms are about the cone's size. Which origin is used depends on the ray
+ * and the cone alone, never on tmin/tmax. */
 ISECT_INLINE int cone_isect(const cone_shape *c, const isect_ray *ray, double tmax, double *t)
 {
     bsp_vec3 oc = v3_sub(ray->org, c->base);
+    double ts = 0.0;
+    if (__builtin_expect(v3_dot(oc, oc) > c->far2, 0)) {
+        bsp_vec3 mid = v3_madd(c->base, c->axis, 0.5 * c->length);
+        ts = v3_dot(v3_sub(mid, ray->org), ray->dir) / ray->dd;
+        oc = v3_sub(v3_madd(ray->org, ray->dir, ts), c->base);
+    }
     double h0 = v3_dot(oc, c->axis), hd = v3_dot(ray->dir, c->axis);
     bsp_vec3 po = v3_madd(oc, c->axis, -h0);
     bsp_vec3 pd = v3_madd(ray->dir, c->axis, -hd);
@@ -307,15 +387,8 @@ ISECT_INLINE int cone_isect(const cone_shape *c, const isect_ray *ray, double tm
             return 0;
         quadratic_roots(qa, qb, qc, disc, &t0, &t1);
     }
-    if (cone_valid_root(c, ray, tmax, oc, h0, hd, t0)) {
-        *t = t0;
-        return 1;
-    }
-    if (cone_valid_root(c, ray, tmax, oc, h0, hd, t1)) {
-        *t = t1;
-        return 1;
-    }
-    return 0;
+    return cone_root(c, ray, tmax, oc, h0, hd, ts, t0, t) ||
+           cone_root(c, ray, tmax, oc, h0, hd, ts, t1, t);
 }
 
 #endif /* BSPRAY_GEOM_ISECT_H */

@@ -97,6 +97,8 @@ typedef struct cone_shape {
     double base_radius; /* |radius| at the base, >= 0 */
     double apex_radius; /* |radius| at the apex, >= 0; not both 0 */
     double slope;       /* (apex_radius - base_radius) / length */
+    double far2;        /* squared distance from the base beyond which an origin is moved
+                           along the ray before solving (cone_isect) */
     int inside_only;    /* NFF negative radii: only the inside is visible */
 } cone_shape;
 
