@@ -210,11 +210,12 @@ static double *cost_field(bsp_sah_costs *c, const char *name, size_t len)
     return NULL;
 }
 
-/* --costs NAME=X[,NAME=X...]: the SAH's C_trav and T_i, each positive and
- * finite; names not given keep their defaults (0 in the options). */
 #define STRINGIFY_TEXT(x) #x
 #define STRINGIFY(x) STRINGIFY_TEXT(x)
 
+/* --costs NAME=X[,NAME=X...]: the SAH's C_trav and T_i, each in
+ * [BSP_SAH_COST_MIN, BSP_SAH_COST_MAX]; names not given keep their defaults
+ * (0 in the options). */
 static void parse_costs(args *a, const char *opt, bsp_sah_costs *c)
 {
     const char *v = opt_value(a, opt), *p = v;

@@ -368,11 +368,7 @@ int kd_clip_prim_bounded(const bsp_scene *scene, uint32_t prim, bsp_box pb, cons
                          double pad, kd_clip_scratch *scr, bsp_box *out)
 {
     const prim_record *p = &scene->prims[prim];
-    bsp_box g = *box, b;
-    for (int k = 0; k < 3; k++) {
-        g.lo.v[k] -= pad;
-        g.hi.v[k] += pad;
-    }
+    bsp_box g = box_grow(*box, pad), b;
     if (box_is_empty(pb) || !box_meets(pb, &g))
         return 0;
     int r = 1;
@@ -405,11 +401,7 @@ int kd_clip_prim_bounded(const bsp_scene *scene, uint32_t prim, bsp_box pb, cons
             return r;
         return finish(b, pb, &g, pad, out);
     }
-    for (int k = 0; k < 3; k++) {
-        b.lo.v[k] -= pad;
-        b.hi.v[k] += pad;
-    }
-    *out = b;
+    *out = box_grow(b, pad);
     return 1;
 }
 
@@ -442,12 +434,7 @@ static int clip_triangle_split(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g
         else
             gc.lo.v[axis] = s - pad;
         if (box_inside(pb, &gc)) {
-            bsp_box b = pb;
-            for (int k = 0; k < 3; k++) {
-                b.lo.v[k] -= pad;
-                b.hi.v[k] += pad;
-            }
-            out[c] = b;
+            out[c] = box_grow(pb, pad);
             got |= 1 << c;
             continue;
         }
@@ -474,11 +461,7 @@ int kd_clip_prim_split(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
 {
     const prim_record *p = &scene->prims[prim];
     if ((shape_kind)p->shape == SHAPE_TRIANGLE) {
-        bsp_box g = *cell;
-        for (int k = 0; k < 3; k++) {
-            g.lo.v[k] -= pad;
-            g.hi.v[k] += pad;
-        }
+        bsp_box g = box_grow(*cell, pad);
         if (box_is_empty(pb) || !box_meets(pb, &g))
             return 0;
         const triangle_shape *tr = &scene->triangles[p->slot];

@@ -20,13 +20,7 @@ int kd_tree_init(kd_tree *t, const bsp_scene *scene, int max_depth, int max_leaf
     t->max_leaf_prims = max_leaf_prims;
     t->pad = KD_PAD_REL * scene_scale(scene);
     bsp_box b = bsp_scene_bounds(scene);
-    if (!box_is_empty(b)) {
-        for (int k = 0; k < 3; k++) {
-            b.lo.v[k] -= t->pad;
-            b.hi.v[k] += t->pad;
-        }
-    }
-    t->box = b;
+    t->box = box_is_empty(b) ? b : box_grow(b, t->pad);
     t->cap_nodes = 1024;
     t->nodes = malloc(t->cap_nodes * sizeof *t->nodes);
     if (!t->nodes)
@@ -125,12 +119,7 @@ void kd_make_interior(kd_tree *t, uint32_t i, unsigned axis, float split, uint32
 
 bsp_box kd_prim_box(const kd_tree *t, const bsp_scene *scene, uint32_t prim)
 {
-    bsp_box b = bsp_scene_prim_bounds(scene, prim);
-    for (int k = 0; k < 3; k++) {
-        b.lo.v[k] -= t->pad;
-        b.hi.v[k] += t->pad;
-    }
-    return b;
+    return box_grow(bsp_scene_prim_bounds(scene, prim), t->pad);
 }
 
 /* --- statistics ------------------------------------------------------------------- */
@@ -241,12 +230,8 @@ static int unlisted_ok(const check_walk *w, uint32_t p, bsp_box cell)
 {
     if (w->scene->prims[p].shape != SHAPE_POLYGON)
         return 0;
-    double pad = w->t->pad * KD_CHECK_PAD_FRACTION;
-    for (int k = 0; k < 3; k++) {
-        cell.lo.v[k] -= pad;
-        cell.hi.v[k] += pad;
-    }
-    return !kd_polygon_meets_box(w->scene, p, &cell);
+    bsp_box g = box_grow(cell, w->t->pad * KD_CHECK_PAD_FRACTION);
+    return !kd_polygon_meets_box(w->scene, p, &g);
 }
 
 static int check_fail(check_walk *w, const char *fmt, uint32_t a, uint32_t b)

@@ -91,6 +91,15 @@ static inline bsp_box box_union(bsp_box a, bsp_box b)
     r.hi = v3_max(a.hi, b.hi);
     return r;
 }
+/* B grown by D on every side (D >= 0; the padding of the kd-trees). */
+static inline bsp_box box_grow(bsp_box b, double d)
+{
+    for (int k = 0; k < 3; k++) {
+        b.lo.v[k] -= d;
+        b.hi.v[k] += d;
+    }
+    return b;
+}
 static inline bsp_box box_add_point(bsp_box a, bsp_vec3 p)
 {
     bsp_box r;
