@@ -267,10 +267,10 @@ static long stats_field(const char *out, const char *label)
     return p ? strtol(p + strlen(label), NULL, 10) : -1;
 }
 
-/* --costs, --empty-bonus and --min-saving reach the builder: the CLI's tree has the leaves
- * and references of the tree the API builds with the same costs (an
- * independent build), which differ from the default tree's; bad lists are
- * usage errors (exit 2) that name the option. */
+/* --costs, --empty-bonus, --min-saving and --leaf-budget reach the builder: the CLI's tree has the
+ * leaves and references of the tree the API builds with the same costs (an independent build),
+ * which differ from the default tree's; bad lists are usage errors (exit 2) that name the option.
+ */
 TEST(cli_costs_reach_the_builder)
 {
     bsp_scene *s = NULL;
@@ -353,11 +353,33 @@ TEST(cli_costs_reach_the_builder)
     CHECK(stats_field(out, "N_V") < (long)want.leaves); /* the default limit prunes */
     free(out);
 
+    /* --leaf-budget and --leaf-budget-min reach it: tetra's tree of at most
+     * half a leaf per primitive, as the API builds it */
+    REQUIRE(bsp_scene_load("spd:tetra", &s, &err) == BSP_OK);
+    bsp_build_options_defaults(&o);
+    o.sah_leaf_budget = 0.5;
+    o.sah_leaf_budget_min = 1;
+    REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+    bsp_accel_tree_stats(a, &want);
+    bsp_accel_destroy(a);
+    CHECK(want.leaves <= bsp_scene_prim_count(s) / 2);
+    bsp_scene_destroy(s);
+    snprintf(cmd, sizeof cmd, "%s stats spd:tetra --leaf-budget 0.5 --leaf-budget-min 1",
+             harness_cli());
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    CHECK(stats_field(out, "N_V") == (long)want.leaves);
+    CHECK(stats_field(out, "N_OIV") == (long)want.references);
+    free(out);
+
     const char *bad[] = {
         "--costs sphere",         "--costs sphere=0",         "--costs bogus=1",
         "--costs sphere=1,",      "--costs cone=inf",         "--empty-bonus 1",
         "--min-saving -1",        "--min-saving inf",         "--min-saving x",
-        "--costs triangle=1e308", "--costs traversal=1e-308", "--costs sphere=2e6"};
+        "--costs triangle=1e308", "--costs traversal=1e-308", "--costs sphere=2e6",
+        "--leaf-budget -1",       "--leaf-budget nan",        "--leaf-budget-min 0",
+        "--leaf-budget-min x"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         snprintf(cmd, sizeof cmd, "%s stats spd:lattice:2 --accel sah %s 2>&1", harness_cli(),
                  bad[i]);
@@ -365,7 +387,7 @@ TEST(cli_costs_reach_the_builder)
         REQUIRE(out);
         CHECK_EQ_INT(st, 2);
         CHECK(strstr(out, "--costs") || strstr(out, "--empty-bonus") ||
-              strstr(out, "--min-saving"));
+              strstr(out, "--min-saving") || strstr(out, "--leaf-budget"));
         if (strstr(bad[i], "e308") || strstr(bad[i], "2e6"))
             CHECK_STR_CONTAINS(out, "every cost must be a number in [1e-6, 1e6]");
         free(out);

@@ -37,6 +37,8 @@
 #include "geom/vec.h"
 #include "harness.h"
 
+static int ray_count(int full);
+
 static int quick(void)
 {
     const char *q = getenv("BSPRAY_TEST_QUICK");
@@ -663,6 +665,53 @@ TEST(sah_min_saving_prunes_only_negligible_cells)
     bsp_scene_destroy(s);
 }
 
+/* The leaf budget (kd_prune.c) on teapot (the generator's): half a leaf per
+ * primitive and no least budget leave at most that many leaves, but not
+ * far fewer (the threshold is the least that meets it); the pruned tree
+ * passes the invariant check (build) and returns the naive method's hits,
+ * mailboxes on and off; one and three build threads make the very same
+ * pruned tree; a budget the tree meets changes nothing. */
+TEST(sah_leaf_budget_prunes_to_the_budget)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load("spd:teapot", &s, &err) == BSP_OK);
+    size_t n = bsp_scene_prim_count(s);
+    bsp_build_options o = sah_options();
+    o.sah_leaf_budget = -1.0;
+    bsp_accel *full = build(s, &o);
+    size_t all = (tree_of(full)->nnodes + 1) / 2;
+    o.sah_leaf_budget = 0.5;
+    o.sah_leaf_budget_min = 1;
+    o.threads = 1;
+    bsp_accel *pruned[2];
+    pruned[0] = build(s, &o);
+    o.mailbox = 0;
+    pruned[1] = build(s, &o);
+    o.mailbox = 1;
+    o.threads = 3;
+    bsp_accel *threaded = build(s, &o);
+    const kd_tree *tp = tree_of(pruned[0]), *tt = tree_of(threaded);
+    size_t leaves = (tp->nnodes + 1) / 2, budget = (n + 1) / 2;
+    CHECK_MSG(leaves <= budget && leaves > budget / 2 && budget < all,
+              "%zu leaves for a budget of %zu (unpruned %zu)", leaves, budget, all);
+    CHECK(tp->nnodes == tt->nnodes && tp->nprims == tt->nprims &&
+          !memcmp(tp->nodes, tt->nodes, tp->nnodes * sizeof *tp->nodes) &&
+          !memcmp(tp->prims, tt->prims, tp->nprims * sizeof *tp->prims));
+    check_exact_accel(s, "teapot, leaf budget", pruned, ray_count(20000), 4343);
+    /* a budget the tree meets: the tree of no budget */
+    o.sah_leaf_budget = (double)(all + 1) / (double)n;
+    bsp_accel *met = build(s, &o);
+    const kd_tree *tm = tree_of(met), *tf = tree_of(full);
+    CHECK(tm->nnodes == tf->nnodes && tm->nprims == tf->nprims &&
+          !memcmp(tm->nodes, tf->nodes, tm->nnodes * sizeof *tm->nodes));
+    bsp_accel_destroy(met);
+    bsp_accel_destroy(threaded);
+    bsp_accel_destroy(pruned[0]);
+    bsp_accel_destroy(pruned[1]);
+    bsp_accel_destroy(full);
+    bsp_scene_destroy(s);
+}
 
 static void check_exact_opts(const bsp_scene *s, const char *name, bsp_build_options o, int nrays,
                              uint64_t seed)

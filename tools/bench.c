@@ -95,7 +95,7 @@ static void print_help(void)
            "  --repeat N        timed renders per T_TR figure, the best counts (default 3)\n"
            "  --csv FILE        also write one CSV row per scene x method\n"
            "  --quiet           no progress lines on stderr\n"
-           "  --costs LIST, --empty-bonus F, --min-saving X  the SAH cost model (see\n"
+           "  --costs LIST, --empty-bonus F, --min-saving X, --leaf-budget X  the SAH model (see\n"
            "                 'bspray render --help')\n"
            "\n"
            "Columns: T_B build seconds on 1 and N threads (the same tree); MB structure size;\n"
@@ -302,7 +302,7 @@ typedef struct bench_opts {
     int repeat; /* timed renders per figure; T_TR is the best */
     bsp_accel_kind kinds[BSP_ACCEL_KIND_COUNT];
     int nkinds, kinds_given;
-    cost_args costs; /* --costs, --empty-bonus, --min-saving */
+    cost_args costs; /* --costs, --empty-bonus, --min-saving, --leaf-budget */
     FILE *csv;
 } bench_opts;
 

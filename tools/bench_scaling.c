@@ -47,7 +47,7 @@ typedef struct scaling_opts {
     bsp_accel_kind kinds[MAX_KINDS];
     int nkinds;
     int repeat, repeat_given, threads, quiet;
-    cost_args costs; /* --costs, --empty-bonus, --min-saving */
+    cost_args costs; /* --costs, --empty-bonus, --min-saving, --leaf-budget */
 } scaling_opts;
 
 /* The figures of one scene x method. */
@@ -82,7 +82,7 @@ static void print_help(void)
            "  --threads N     the all-threads build uses N threads (default: all cores)\n"
            "  --csv FILE      also write one CSV row per scene x method\n"
            "  --quiet         no progress lines on stderr\n"
-           "  --costs LIST, --empty-bonus F, --min-saving X  the SAH cost model (see\n"
+           "  --costs LIST, --empty-bonus F, --min-saving X, --leaf-budget X  the SAH model (see\n"
            "                 'bspray render --help')\n"
            "\n"
            "Columns (CSV names in brackets):\n"

@@ -255,16 +255,19 @@ static int in_saving_range(double x)
     return x >= 0.0 && x < INFINITY;
 }
 
-#define COST_ARGS_HELP                                                                      \
-    "  --costs LIST       sah family: the cost model, NAME=X,... relative to one traversal\n"  \
-    "                     step: traversal (C_trav, default 1), sphere, triangle, polygon\n"   \
-    "                     and vertex (an n-gon costs polygon + n * vertex), cone; the\n"      \
-    "                     defaults are `bspray calibrate`'s ratios (docs/kdtree.md)\n"        \
-    "  --empty-bonus F    sah family: a split with an empty side costs (1 - F) times as\n"    \
-    "                     much, F in [0, 1) (default 0.1; 0: no bonus)\n"                   \
-    "  --min-saving X     sah family: make a split only when it saves at least X mean\n"    \
-    "                     intersection tests per ray of the whole tree, X >= 0 (default\n"  \
-    "                     1e-9: prunes chains of tiny cells at shared vertices; 0: none)\n"
+#define COST_ARGS_HELP                                                                             \
+    "  --costs LIST       sah family: the cost model, NAME=X,... relative to one traversal\n"      \
+    "                     step: traversal (C_trav, default 1), sphere, triangle, polygon\n"        \
+    "                     and vertex (an n-gon costs polygon + n * vertex), cone; the\n"           \
+    "                     defaults are `bspray calibrate`'s ratios (docs/kdtree.md)\n"             \
+    "  --empty-bonus F    sah family: a split with an empty side costs (1 - F) times as\n"         \
+    "                     much, F in [0, 1) (default 0.1; 0: no bonus)\n"                          \
+    "  --min-saving X     sah family: make a split only when it saves at least X mean\n"           \
+    "                     intersection tests per ray of the whole tree, X >= 0 (default\n"         \
+    "                     1e-9: prunes chains of tiny cells at shared vertices; 0: none)\n"        \
+    "  --leaf-budget X    sah family: at most X leaves per primitive, X >= 0: a larger\n"          \
+    "                     tree loses the splits that save least (default 1; 0: none)\n"            \
+    "  --leaf-budget-min N  sah family: ... but never fewer than N leaves (default 131072)\n"
 
 int parse_cost_arg(args *a, cost_args *c)
 {
@@ -277,6 +280,11 @@ int parse_cost_arg(args *a, cost_args *c)
     } else if (!strcmp(s, "--min-saving")) {
         double x = parse_real(a, s, opt_value(a, s), in_saving_range, "a number >= 0");
         c->min_saving = x > 0.0 ? x : -1.0; /* likewise */
+    } else if (!strcmp(s, "--leaf-budget")) {
+        double x = parse_real(a, s, opt_value(a, s), in_saving_range, "a number >= 0");
+        c->leaf_budget = x > 0.0 ? x : -1.0; /* likewise */
+    } else if (!strcmp(s, "--leaf-budget-min")) {
+        c->leaf_budget_min = (size_t)parse_int(a, s, 1, 1 << 30);
     } else {
         return 0;
     }
@@ -288,6 +296,8 @@ void apply_cost_args(const cost_args *c, bsp_build_options *o)
     o->sah_costs = c->costs;
     o->sah_empty_bonus = c->empty_bonus;
     o->sah_min_saving = c->min_saving;
+    o->sah_leaf_budget = c->leaf_budget;
+    o->sah_leaf_budget_min = c->leaf_budget_min;
 }
 
 const char build_args_help[] =
@@ -333,8 +343,10 @@ int parse_build_arg(args *a, bsp_build_options *opts)
         opts->mixed_model = parse_mixed_model(a, s);
     } else if (!strcmp(s, "--mixed-check")) {
         opts->mixed_check = parse_on_off(a, s);
-    } else if (!strcmp(s, "--costs") || !strcmp(s, "--empty-bonus") || !strcmp(s, "--min-saving")) {
-        cost_args c = {opts->sah_costs, opts->sah_empty_bonus, opts->sah_min_saving};
+    } else if (!strcmp(s, "--costs") || !strcmp(s, "--empty-bonus") || !strcmp(s, "--min-saving") ||
+               !strcmp(s, "--leaf-budget") || !strcmp(s, "--leaf-budget-min")) {
+        cost_args c = {opts->sah_costs, opts->sah_empty_bonus, opts->sah_min_saving,
+                       opts->sah_leaf_budget, opts->sah_leaf_budget_min};
         parse_cost_arg(a, &c);
         apply_cost_args(&c, opts);
     } else if (!strcmp(s, "--mixed-share")) {

@@ -47,15 +47,18 @@ int parse_build_arg(args *a, bsp_build_options *opts);
 /* Help text of those options (one line each, indented like the commands'). */
 extern const char build_args_help[];
 
-/* The SAH cost model of the command line: --costs, --empty-bonus and
- * --min-saving (also taken by parse_build_arg) for the commands that build
+/* The SAH cost model of the command line: --costs, --empty-bonus,
+ * --min-saving, --leaf-budget and --leaf-budget-min (also taken by
+ * parse_build_arg) for the commands that build
  * several structures (bench, bench --paper, bench --scaling, viz). */
 typedef struct cost_args {
     bsp_sah_costs costs; /* 0 fields: the defaults */
     double empty_bonus;  /* as bsp_build_options.sah_empty_bonus */
     double min_saving;   /* as bsp_build_options.sah_min_saving */
+    double leaf_budget;  /* as bsp_build_options.sah_leaf_budget */
+    size_t leaf_budget_min; /* as bsp_build_options.sah_leaf_budget_min */
 } cost_args;
-/* Consumes --costs, --empty-bonus or --min-saving like parse_build_arg. */
+/* Consumes one of those options like parse_build_arg. */
 int parse_cost_arg(args *a, cost_args *c);
 /* Copies C into the build options O. */
 void apply_cost_args(const cost_args *c, bsp_build_options *o);

@@ -82,7 +82,7 @@ typedef struct paper_opts {
     int mixed_check;             /* sah-mixed's check against sah (default 1) */
     paper_rule rules[MAX_RULES];
     int nrules;
-    cost_args costs; /* --costs, --empty-bonus, --min-saving */
+    cost_args costs; /* --costs, --empty-bonus, --min-saving, --leaf-budget */
 } paper_opts;
 
 static void print_help(void)
@@ -119,7 +119,7 @@ static void print_help(void)
            "                  rays (primary or all), ScnCov, nrays, N_V, N_IT, N_TS, T_B, T_TR,\n"
            "                  threads, tree (the rule, or sah where sah-mixed kept sah's tree)\n"
            "  --quiet         no progress lines\n"
-           "  --costs LIST, --empty-bonus F, --min-saving X  the SAH cost model (see\n"
+           "  --costs LIST, --empty-bonus F, --min-saving X, --leaf-budget X  the SAH model (see\n"
            "                 'bspray render --help')\n",
            paper_usage);
 }

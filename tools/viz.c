@@ -62,8 +62,8 @@ static const char viz_help[] =
     "                   plane dwarfs everything else\n"
     "  --threads N      render threads for the background (default: all cores)\n"
     "  --quiet          print nothing but errors\n"
-    "  --costs LIST, --empty-bonus F, --min-saving X  the SAH cost model (see\n"
-           "                 'bspray render --help')\n"
+    "  --costs LIST, --empty-bonus F, --min-saving X, --leaf-budget X  the SAH model (see\n"
+    "                 'bspray render --help')\n"
     "  --eye, --at, --dir, --up X,Y,Z   override the camera; --fov DEG its field of view.\n"
     "                   The sah-per, sah-par and sah-mixed trees are built for this view.\n"
     "\n"
@@ -142,7 +142,7 @@ int cmd_viz(int argc, char **argv)
     double zoom = 1.0;
     draw_color_mode mode = DRAW_COLOR_DEPTH;
     view_args view = {0};
-    cost_args costs = {{0}, 0.0, 0.0};
+    cost_args costs = {{0}, 0.0, 0.0, 0.0, 0};
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {

@@ -113,6 +113,12 @@ typedef struct bsp_build_options {
                                 the leaf's, over the mean T_i. 0: the default (1e-9,
                                 which prunes the chains of tiny cells around shared
                                 vertices; docs/kdtree.md), negative: none */
+    double sah_leaf_budget;  /* sah family: a tree of more than this many leaves per
+                                primitive (and more than sah_leaf_budget_min) loses
+                                the splits that save least until it has no more
+                                (docs/kdtree.md). 0: the default, negative: no budget */
+    size_t sah_leaf_budget_min; /* sah family: the budget is never below this many
+                                   leaves (0: the default, 131072: 2 MiB of nodes) */
     int sah_split_to_limits; /* sah family: 1 splits every node until max_depth or
                                 max_leaf_prims ends it (the paper's termination criteria);
                                 0 (default): also a leaf when the best split does not pay */

@@ -28,6 +28,7 @@ void bsp_build_options_defaults(bsp_build_options *opts)
     kd_cost_defaults(&opts->sah_costs);
     opts->sah_empty_bonus = KD_DEFAULT_EMPTY_BONUS;
     opts->sah_min_saving = KD_DEFAULT_MIN_SAVING;
+    opts->sah_leaf_budget = KD_DEFAULT_LEAF_BUDGET;
     opts->mixed_model = BSP_MIXED_COUNTED;
     opts->mixed_check = 1;
 }

@@ -94,6 +94,12 @@ void kd_cost_resolve(const bsp_build_options *o, kd_cost_model *m)
     else if (ms < 0.0)
         ms = 0.0;
     m->min_saving = ms;
+    double lb = o->sah_leaf_budget;
+    if (lb == 0.0 || !isfinite(lb))
+        lb = KD_DEFAULT_LEAF_BUDGET;
+    m->leaf_budget = lb > 0.0 ? lb : 0.0;
+    m->leaf_budget_min =
+        o->sah_leaf_budget_min ? o->sah_leaf_budget_min : KD_DEFAULT_LEAF_BUDGET_MIN;
     m->mailbox = o->mailbox != 0;
     m->mailbox_hit = KD_MAILBOX_HIT_COST * m->c.traversal;
 }

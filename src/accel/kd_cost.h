@@ -33,6 +33,9 @@ typedef struct kd_cost_model {
     double empty_bonus; /* in [0, 1) */
     double min_saving;  /* >= 0: the least saving of a split, in mean tests per ray
                            (bsp_build_options.sah_min_saving); 0: no limit */
+    double leaf_budget; /* > 0: the most leaves per primitive
+                           (bsp_build_options.sah_leaf_budget); 0: no budget */
+    size_t leaf_budget_min; /* >= 1: the least budget, in leaves */
     int mailbox;        /* the tree is traversed with mailboxes: a primitive met
                            again in a later leaf costs mailbox_hit, not T_i */
     double mailbox_hit; /* the cost of that skipped test, in units of C_trav */
@@ -46,6 +49,14 @@ HIDDEN void kd_cost_defaults(bsp_sah_costs *c);
  * (some 100 tests) only after some 10^11 rays. On the SPD scenes the splits
  * it prunes changed render instructions by at most 0.006 % (docs/kdtree.md). */
 #define KD_DEFAULT_MIN_SAVING 1e-9
+/* The default leaf budget (bsp_build_options.sah_leaf_budget), in leaves
+ * per primitive; see docs/kdtree.md. */
+#define KD_DEFAULT_LEAF_BUDGET 1.0
+/* The default least budget (bsp_build_options.sah_leaf_budget_min): a
+ * tree of at most this many leaves is never pruned. Its nodes (2 MiB) fit
+ * in a core's L2 cache, and the splits' savings are real there
+ * (docs/kdtree.md). */
+#define KD_DEFAULT_LEAF_BUDGET_MIN 131072
 /* A test skipped by the mailbox (one stamp load and compare; often a cache
  * miss) in units of C_trav: about 2 ns against 13 ns per traversal step. */
 #define KD_MAILBOX_HIT_COST 0.15

@@ -128,6 +128,7 @@ typedef struct sah_build {
     double min_saving;  /* the least saving of a split that pays, in cost units per ray
                            of the root: kd_cost_model.min_saving times the mean T_i */
     double inv_root_area; /* 1 / the root cell's surface area */
+    int record_savings;   /* record every split's saving in t->saving (kd_prune.h) */
     int mailbox;        /* mailbox-aware costs (kd_cost_model.mailbox) */
     double mb_hit;      /* the cost of a test the mailbox skips */
     int cost_mode;      /* COST_*: how an event finds its T_i */

@@ -145,6 +145,11 @@ static void run_task(sah_build *w, sah_task *tk)
                            "out of memory while building the kd-tree");
         return;
     }
+    if (w->record_savings && !kd_tree_record_savings(sub)) {
+        tk->st =
+            error_set(&tk->err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
+        return;
+    }
     sub->nnodes = 1;
     sub->nodes[0].u.first = 0;
     sub->nodes[0].bits = KD_LEAF_TAG;
@@ -269,18 +274,8 @@ static int splice(kd_tree *t, const sah_task *tk)
     size_t add = s->nnodes - 1, base = t->nnodes;
     if (!kd_tree_fits(t, base + add, t->nprims + s->nprims))
         return 0;
-    if (base + add > t->cap_nodes) {
-        size_t ncap = t->cap_nodes;
-        while (ncap < base + add)
-            ncap *= 2;
-        if (ncap > KD_MAX_NODES)
-            ncap = KD_MAX_NODES;
-        kd_node *nn = realloc(t->nodes, ncap * sizeof *nn);
-        if (!nn)
-            return 0;
-        t->nodes = nn;
-        t->cap_nodes = (uint32_t)ncap;
-    }
+    if (!kd_reserve_nodes(t, base + add))
+        return 0;
     if (!kd_reserve_prims(t, s->nprims))
         return 0;
     const uint32_t pbase = (uint32_t)t->nprims;
@@ -290,7 +285,10 @@ static int splice(kd_tree *t, const sah_task *tk)
             x.u.first += pbase;
         else
             x.bits = kd_pack((uint32_t)(base + kd_child(&x) - 1), kd_axis(&x));
-        t->nodes[j == 0 ? tk->node : base + j - 1] = x;
+        size_t to = j == 0 ? tk->node : base + j - 1;
+        t->nodes[to] = x;
+        if (t->saving)
+            t->saving[to] = s->saving[j];
     }
     t->nnodes = (uint32_t)(base + add);
     if (s->nprims > 0)

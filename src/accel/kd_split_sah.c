@@ -69,6 +69,10 @@
  * the depth limit through cells down to a few paddings wide (tetra: 60 % of its
  * leaves; docs/kdtree.md).
  *
+ * With a leaf budget (kd_prune.c) each split's saving, as above, is
+ * recorded in t->saving, and a tree with more leaves than the budget loses
+ * the splits that save least once it is built.
+ *
  * Not used: min-max binning near the root (Mitsuba). Tried with 256 bins
  * above 4096 primitives, it saved ~15% of the build on balls but cost 6-8%
  * of expected cost on tetra (its planes must hit the Sierpinski grid
@@ -84,6 +88,7 @@
  * region and a one-sided split copies nothing. No allocation per node: every
  * scratch array is grown amortized.
  */
+#include "accel/kd_prune.h"
 #include "accel/kd_sah.h"
 #include "util/insertion_sort.h"
 
@@ -137,21 +142,6 @@ static void sort_keys(uint64_t *a, size_t n)
         return;
     }
     INSERTION_SORT(uint64_t, a, n);
-}
-
-static int cmp_u32(const void *x, const void *y)
-{
-    uint32_t a = *(const uint32_t *)x, b = *(const uint32_t *)y;
-    return (a > b) - (a < b);
-}
-
-static void sort_u32(uint32_t *a, size_t n)
-{
-    if (n > 32) {
-        qsort(a, n, sizeof *a, cmp_u32);
-        return;
-    }
-    INSERTION_SORT(uint32_t, a, n);
 }
 
 static bsp_status oom(sah_build *b)
@@ -218,7 +208,7 @@ static bsp_status make_leaf(sah_build *b, uint32_t node, const uint64_t *e, size
     for (size_t i = 0; i < 2 * n; i++)
         if (e[i] & EV_START)
             b->list[c++] = ev_prim(e[i]);
-    sort_u32(b->list, c);
+    kd_sort_prims(b->list, c);
     return put_leaf(b->t, node, b->list, c) ? BSP_OK : oom(b);
 }
 
@@ -354,9 +344,11 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     /* a split that pays, but saves so little per ray of the whole tree that
      * it is not worth a node (the uniform-line probability of the cell, by
      * surface area, whatever the build's measure) */
-    if (best.cost < tsum && !b->to_limits &&
-        kd_surface_area(&cell) * b->inv_root_area * (tsum - best.cost) < b->min_saving)
+    const double share = kd_surface_area(&cell) * b->inv_root_area;
+    if (best.cost < tsum && !b->to_limits && share * (tsum - best.cost) < b->min_saving)
         return make_leaf(b, node, b->ev + L.base, n);
+    if (t->saving) /* a bad refine's is its subtree's, below */
+        t->saving[node] = share * (tsum - best.cost);
     int bad_here = 0;
     if (best.cost >= tsum && !b->to_limits) {
         if (bad >= MAX_BAD_REFINES || n < MIN_BAD_REFINE_PRIMS ||
@@ -533,20 +525,19 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     }
     double cost = b->ctrav + (ml * cl + mr * cr - save) / area;
     if (!bad_here || cost < tsum) {
+        if (bad_here && t->saving)
+            t->saving[node] = share * (tsum - cost);
         *cost_out = cost;
         return BSP_OK;
     }
 
     /* 6. retract: the speculative split did not pay off; one leaf of the
      * primitives of the subtree's leaves (each once, in index order) */
-    size_t refs = t->nprims - saved_prims, c = 0;
+    size_t refs = t->nprims - saved_prims;
     if (!grow_list(b, refs))
         return oom(b);
     memcpy(b->list, t->prims + saved_prims, refs * sizeof *b->list);
-    sort_u32(b->list, refs);
-    for (size_t i = 0; i < refs; i++)
-        if (c == 0 || b->list[i] != b->list[c - 1])
-            b->list[c++] = b->list[i];
+    size_t c = kd_sort_unique_prims(b->list, refs);
     t->nnodes = child;
     t->nprims = saved_prims;
     return put_leaf(t, node, b->list, c) ? BSP_OK : oom(b);
@@ -717,10 +708,23 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     tasks.max_n = n / 64 > 512 ? n / 64 : 512;
     tasks.min_n = tasks.max_n / 8;
     b.tasks = &tasks;
+    /* a leaf budget: record the splits' savings, prune afterwards */
+    b.record_savings = cm.leaf_budget > 0.0 && !b.to_limits;
+    if (b.record_savings && !kd_tree_record_savings(t)) {
+        st = oom(&b);
+        goto done;
+    }
     kd_sah_start_workers(&b, kd_build_threads(o), n);
     st = kd_sah_build_node(&b, 0, t->box, root, 3 * m, 0, 0, b.surface, &cost);
     st = kd_sah_finish_tasks(&b, st);
+    if (st == BSP_OK && b.record_savings) {
+        double most = fmax(ceil(cm.leaf_budget * (double)n), (double)cm.leaf_budget_min);
+        if (!kd_prune_to_leaves(t, most < (double)KD_MAX_NODES ? (size_t)most : KD_MAX_NODES))
+            st = oom(&b);
+    }
 done:
+    free(t->saving);
+    t->saving = NULL;
     kd_sah_scratch_free(&b);
     if (descent)
         descent->free_ctx(b.dctx);

@@ -12,6 +12,7 @@
 #include "accel/kd_tree.h"
 #include "accel/kd_view.h"
 #include "geom/vec.h"
+#include "util/insertion_sort.h"
 
 int kd_tree_init(kd_tree *t, const bsp_scene *scene, int max_depth, int max_leaf_prims)
 {
@@ -37,6 +38,7 @@ void kd_tree_free(kd_tree *t)
         return;
     free(t->nodes);
     free(t->prims);
+    free(t->saving);
     memset(t, 0, sizeof *t);
 }
 
@@ -63,20 +65,42 @@ bsp_status kd_build_failed(const kd_tree *t, bsp_error *err)
         t->max_depth, t->max_leaf_prims);
 }
 
+int kd_reserve_nodes(kd_tree *t, size_t nodes)
+{
+    if (!kd_tree_fits(t, nodes, t->nprims))
+        return 0;
+    if (nodes <= t->cap_nodes)
+        return 1;
+    size_t ncap = t->cap_nodes ? t->cap_nodes : 1024;
+    while (ncap < nodes)
+        ncap *= 2;
+    if (ncap > KD_MAX_NODES)
+        ncap = KD_MAX_NODES;
+    kd_node *nn = realloc(t->nodes, ncap * sizeof *nn);
+    if (!nn)
+        return 0;
+    t->nodes = nn;
+    if (t->saving) {
+        double *ns = realloc(t->saving, ncap * sizeof *ns);
+        if (!ns)
+            return 0; /* cap_nodes unchanged: the savings stay the smaller array */
+        t->saving = ns;
+    }
+    t->cap_nodes = (uint32_t)ncap;
+    return 1;
+}
+
+int kd_tree_record_savings(kd_tree *t)
+{
+    free(t->saving);
+    t->saving = calloc(t->cap_nodes ? t->cap_nodes : 1, sizeof *t->saving);
+    return t->saving != NULL;
+}
+
 uint32_t kd_alloc_pair(kd_tree *t)
 {
-    if (!kd_tree_fits(t, (size_t)t->nnodes + 2, t->nprims))
+    if (!kd_reserve_nodes(t, (size_t)t->nnodes + 2))
         return UINT32_MAX;
-    if (t->nnodes + 2 > t->cap_nodes) {
-        uint32_t ncap = t->cap_nodes * 2;
-        if (ncap > KD_MAX_NODES)
-            ncap = KD_MAX_NODES;
-        kd_node *nn = realloc(t->nodes, (size_t)ncap * sizeof *nn);
-        if (!nn)
-            return UINT32_MAX;
-        t->nodes = nn;
-        t->cap_nodes = ncap;
-    }
     uint32_t i = t->nnodes;
     t->nnodes += 2;
     return i;
@@ -97,6 +121,31 @@ int kd_reserve_prims(kd_tree *t, size_t more)
         t->cap_prims = ncap;
     }
     return 1;
+}
+
+static int cmp_u32(const void *x, const void *y)
+{
+    uint32_t a = *(const uint32_t *)x, b = *(const uint32_t *)y;
+    return (a > b) - (a < b);
+}
+
+void kd_sort_prims(uint32_t *a, size_t n)
+{
+    if (n > 32) {
+        qsort(a, n, sizeof *a, cmp_u32);
+        return;
+    }
+    INSERTION_SORT(uint32_t, a, n);
+}
+
+size_t kd_sort_unique_prims(uint32_t *a, size_t n)
+{
+    kd_sort_prims(a, n);
+    size_t c = 0;
+    for (size_t i = 0; i < n; i++)
+        if (c == 0 || a[i] != a[c - 1])
+            a[c++] = a[i];
+    return c;
 }
 
 int kd_make_leaf(kd_tree *t, uint32_t i, const uint32_t *prims, size_t n)

@@ -101,10 +101,19 @@ typedef struct kd_tree {
     size_t max_bytes; /* the most bytes nodes and references may take (0: no limit) */
     int over_limit;   /* an allocation failed for max_bytes or KD_MAX_NODES, not for
                          want of memory: kd_build_failed says which */
+    double *saving;   /* per node (cap_nodes entries) while a build records them
+                         (kd_tree_record_savings): an interior node's saving per ray of
+                         the root, by which a leaf budget ranks splits (kd_prune.h);
+                         NULL: not recorded */
 } kd_tree;
 
 /* --- used by builders ------------------------------------------------------ */
 
+/* Room for NODES nodes in all (and their savings, when recorded); 0 when
+ * out of memory or past KD_MAX_NODES or max_bytes. */
+HIDDEN int kd_reserve_nodes(kd_tree *t, size_t nodes);
+/* Starts recording every node's saving (t->saving); 0 when out of memory. */
+HIDDEN int kd_tree_record_savings(kd_tree *t);
 /* Appends two adjacent nodes and returns the index of the first, or
  * UINT32_MAX when out of memory or past KD_MAX_NODES or max_bytes. */
 HIDDEN uint32_t kd_alloc_pair(kd_tree *t);
@@ -116,6 +125,10 @@ HIDDEN int kd_tree_fits(kd_tree *t, size_t nodes, size_t prims);
 /* The error of a build that could not grow T: its size limit when over_limit,
  * else out of memory. */
 HIDDEN bsp_status kd_build_failed(const kd_tree *t, bsp_error *err);
+/* Sorts the primitive indices A[0..N) ascending. */
+HIDDEN void kd_sort_prims(uint32_t *a, size_t n);
+/* Sorts A[0..N) and keeps each index once, at A[0..the count returned). */
+HIDDEN size_t kd_sort_unique_prims(uint32_t *a, size_t n);
 /* Makes node I a leaf listing PRIMS[0..N). Returns 0 when out of memory. */
 HIDDEN int kd_make_leaf(kd_tree *t, uint32_t i, const uint32_t *prims, size_t n);
 /* Makes node I interior with children at CHILD, CHILD + 1. */
