@@ -13,6 +13,7 @@
  */
 #include <stdint.h>
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 
 #include "accel/kd_prune.h"
@@ -176,7 +177,7 @@ TEST(prune_threshold_is_the_least_that_meets_the_budget)
         REQUIRE(old.nodes && old.prims);
         memcpy(old.nodes, t->nodes, t->nnodes * sizeof *old.nodes);
         memcpy(old.prims, t->prims, t->nprims * sizeof *old.prims);
-        REQUIRE(kd_prune_to_leaves(t, budget));
+        REQUIRE(kd_prune_to_leaves(t, budget, -INFINITY) == 1);
         size_t want_leaves = budget >= all ? all : leaves_at(&old, 0, theta);
         CHECK_MSG((t->nnodes + 1) / 2 == want_leaves, "seed %llu: %u nodes, want %zu leaves",
                   (unsigned long long)seed, t->nnodes, want_leaves);
@@ -193,5 +194,144 @@ TEST(prune_threshold_is_the_least_that_meets_the_budget)
         free(scratch);
         free(vals);
         kd_tree_free(t);
+    }
+}
+
+/* A copy of random tree T with its nodes and leaf lists deep-copied. */
+static kd_tree copy_tree(const kd_tree *t)
+{
+    kd_tree c = *t;
+    c.nodes = malloc(t->nnodes * sizeof *c.nodes);
+    c.prims = malloc((t->nprims ? t->nprims : 1) * sizeof *c.prims);
+    c.saving = malloc(t->nnodes * sizeof *c.saving);
+    REQUIRE(c.nodes && c.prims && c.saving);
+    memcpy(c.nodes, t->nodes, t->nnodes * sizeof *c.nodes);
+    memcpy(c.prims, t->prims, t->nprims * sizeof *c.prims);
+    memcpy(c.saving, t->saving, t->nnodes * sizeof *c.saving);
+    c.cap_nodes = t->nnodes;
+    return c;
+}
+
+/* With a cut, the pruning goes ahead exactly when the splits saving at
+ * least the cut (with their ancestors) make more leaves than the budget —
+ * then as without the cut — and otherwise answers -1 and leaves the tree. */
+TEST(prune_with_a_cut_refuses_where_the_cut_could_matter)
+{
+    for (uint64_t seed = 1; seed <= 60; seed++) {
+        gen g;
+        random_tree(&g, seed * 104729, 3 + (int)(seed % 8));
+        kd_tree *t = &g.t;
+        size_t all = leaves_at(t, 0, -INFINITY);
+        size_t budget = 1 + next_u32() % (all + 2);
+        /* a cut at one of the tree's savings, or between two */
+        double cut = t->saving[0];
+        for (uint32_t v = 0; v < t->nnodes; v++)
+            if (!kd_is_leaf(&t->nodes[v]) && next_u32() % 4 == 0)
+                cut = t->saving[v];
+        if (seed % 3 == 0)
+            cut *= 0.999;
+        int want = leaves_at(t, 0, cut) > budget ? 1 : -1;
+        kd_tree plain = copy_tree(t), old = copy_tree(t);
+        REQUIRE(kd_prune_to_leaves(&plain, budget, -INFINITY) == 1);
+        int got = kd_prune_to_leaves(t, budget, cut);
+        CHECK_MSG(got == want, "seed %llu: %d for a cut at %g (%zu leaves there, budget %zu)",
+                  (unsigned long long)seed, got, cut, leaves_at(&old, 0, cut), budget);
+        if (got == 1)
+            CHECK(t->nnodes == plain.nnodes && t->nprims == plain.nprims &&
+                  !memcmp(t->nodes, plain.nodes, t->nnodes * sizeof *t->nodes) &&
+                  !memcmp(t->prims, plain.prims, t->nprims * sizeof *t->prims));
+        else
+            CHECK(t->nnodes == old.nnodes &&
+                  !memcmp(t->nodes, old.nodes, t->nnodes * sizeof *t->nodes));
+        kd_tree_free(&plain);
+        kd_tree_free(&old);
+        kd_tree_free(t);
+    }
+}
+
+/* Appends a copy of SUB below leaf L of T (T has room), its root at L. */
+static void graft(kd_tree *t, uint32_t l, const kd_tree *sub)
+{
+    uint32_t base = t->nnodes - 1; /* sub's node j >= 1 goes to base + j */
+    size_t pbase = t->nprims;
+    for (uint32_t j = 0; j < sub->nnodes; j++) {
+        kd_node x = sub->nodes[j];
+        if (kd_is_leaf(&x))
+            x.u.first += (uint32_t)pbase;
+        else
+            x.bits = kd_pack(base + kd_child(&x), kd_axis(&x));
+        uint32_t to = j == 0 ? l : base + j;
+        t->nodes[to] = x;
+        t->saving[to] = sub->saving[j];
+    }
+    t->nnodes = base + sub->nnodes;
+    memcpy(t->prims + t->nprims, sub->prims, sub->nprims * sizeof *t->prims);
+    t->nprims += sub->nprims;
+}
+
+/* The estimate is exact when the unbuilt parts are like the built ones: a
+ * top whose every leaf holds the same subtree S. From one built part, or
+ * all, it finds a threshold that prunes the whole tree as the threshold of
+ * the whole tree does (it may name another saving between the same two). */
+TEST(prune_estimate_is_exact_for_parts_alike)
+{
+    for (uint64_t seed = 1; seed <= 40; seed++) {
+        gen top, sub;
+        random_tree(&top, seed * 7177, 2 + (int)(seed % 4));
+        random_tree(&sub, seed * 6311 + 1, 2 + (int)(seed % 5));
+        kd_tree *tt = &top.t, *ts = &sub.t;
+        /* the whole tree: the top with S grafted at each of its leaves */
+        size_t nleaves = (tt->nnodes + 1) / 2;
+        kd_tree whole;
+        memset(&whole, 0, sizeof whole);
+        size_t cap = tt->nnodes + nleaves * ts->nnodes;
+        whole.nodes = malloc(cap * sizeof *whole.nodes);
+        whole.saving = malloc(cap * sizeof *whole.saving);
+        whole.prims = malloc((nleaves * ts->nprims + 1) * sizeof *whole.prims);
+        REQUIRE(whole.nodes && whole.saving && whole.prims);
+        memcpy(whole.nodes, tt->nodes, tt->nnodes * sizeof *whole.nodes);
+        memcpy(whole.saving, tt->saving, tt->nnodes * sizeof *whole.saving);
+        whole.nnodes = tt->nnodes;
+        kd_budget_part *parts = malloc(nleaves * sizeof *parts);
+        REQUIRE(parts);
+        size_t np = 0;
+        for (uint32_t v = 0; v < tt->nnodes; v++)
+            if (kd_is_leaf(&tt->nodes[v])) {
+                parts[np].node = v;
+                parts[np].n = 10;
+                parts[np].sub = NULL;
+                np++;
+                graft(&whole, v, ts);
+            }
+        size_t all = leaves_at(&whole, 0, -INFINITY);
+        REQUIRE(all == (whole.nnodes + 1) / 2);
+        size_t budget = 1 + next_u32() % (all + 2);
+        double *m = malloc(whole.nnodes * sizeof *m), *scratch = malloc(whole.nnodes * sizeof *m);
+        REQUIRE(m && scratch);
+        double want = kd_prune_threshold(&whole, budget, m, scratch);
+        for (int built = 0; built < 2; built++) {
+            for (size_t i = 0; i < np; i++)
+                parts[i].sub = (built || i == np / 2) ? ts : NULL;
+            double got = kd_prune_estimate(tt, parts, np, budget);
+            if (want == -INFINITY) {
+                CHECK_MSG(got == -INFINITY, "seed %llu: estimate %g for a tree within budget",
+                          (unsigned long long)seed, got);
+                continue;
+            }
+            CHECK_MSG(got <= want && leaves_at(&whole, 0, got) == leaves_at(&whole, 0, want),
+                      "seed %llu (%s): estimate %g keeps %zu leaves, threshold %g keeps %zu",
+                      (unsigned long long)seed, built ? "all built" : "one built", got,
+                      leaves_at(&whole, 0, got), want, leaves_at(&whole, 0, want));
+        }
+        /* nothing built: no estimate */
+        for (size_t i = 0; i < np; i++)
+            parts[i].sub = NULL;
+        CHECK(kd_prune_estimate(tt, parts, np, budget) == -INFINITY);
+        free(m);
+        free(scratch);
+        free(parts);
+        kd_tree_free(&whole);
+        kd_tree_free(tt);
+        kd_tree_free(ts);
     }
 }

@@ -84,6 +84,14 @@ static const kd_tree *tree_of(const bsp_accel *a)
     return a->impl;
 }
 
+/* Whether two trees are the same bit for bit: nodes and leaf lists. */
+static int same_tree(const kd_tree *a, const kd_tree *b)
+{
+    return a->nnodes == b->nnodes && a->nprims == b->nprims &&
+           !memcmp(a->nodes, b->nodes, a->nnodes * sizeof *a->nodes) &&
+           !memcmp(a->prims, b->prims, a->nprims * sizeof *a->prims);
+}
+
 static void add_sphere(bsp_scene *s, bsp_vec3 c, double r)
 {
     bsp_error err;
@@ -695,9 +703,7 @@ TEST(sah_leaf_budget_prunes_to_the_budget)
     size_t leaves = (tp->nnodes + 1) / 2, budget = (n + 1) / 2;
     CHECK_MSG(leaves <= budget && leaves > budget / 2 && budget < all,
               "%zu leaves for a budget of %zu (unpruned %zu)", leaves, budget, all);
-    CHECK(tp->nnodes == tt->nnodes && tp->nprims == tt->nprims &&
-          !memcmp(tp->nodes, tt->nodes, tp->nnodes * sizeof *tp->nodes) &&
-          !memcmp(tp->prims, tt->prims, tp->nprims * sizeof *tp->prims));
+    CHECK(same_tree(tp, tt));
     check_exact_accel(s, "teapot, leaf budget", pruned, ray_count(20000), 4343);
     /* a budget the tree meets: the tree of no budget */
     o.sah_leaf_budget = (double)(all + 1) / (double)n;
@@ -711,6 +717,46 @@ TEST(sah_leaf_budget_prunes_to_the_budget)
     bsp_accel_destroy(pruned[1]);
     bsp_accel_destroy(full);
     bsp_scene_destroy(s);
+}
+
+/* The leaf budget's estimate (kd_prune_estimate, kd_sah_tasks.c): the build
+ * that skips the splits below the estimate's cut makes the very tree of the
+ * build that makes every split and then prunes, on every thread count —
+ * on scenes where the estimate does cut (budget_cut > 0). Fails when the
+ * cut also applies below a speculative split (shells). */
+TEST(sah_leaf_budget_estimate_builds_the_same_tree)
+{
+    /* shells: bad refines, whose subtrees the estimate must leave alone */
+    const char *scenes[] = {"spd:mount", "spd:gears", "spd:shells"};
+    for (int i = 0; i < 3; i++) {
+        bsp_scene *s = NULL;
+        bsp_error err;
+        REQUIRE(bsp_scene_load(scenes[i], &s, &err) == BSP_OK);
+        bsp_build_options o = sah_options();
+        o.sah_leaf_budget = 0.5;
+        o.sah_leaf_budget_min = 1;
+        o.threads = 1;
+        o.sah_budget_no_estimate = 1;
+        bsp_accel *whole = build(s, &o);
+        o.sah_budget_no_estimate = 0;
+        bsp_accel *cut[2];
+        cut[0] = build(s, &o);
+        o.threads = 3;
+        cut[1] = build(s, &o);
+        const kd_tree *tw = tree_of(whole), *t0 = tree_of(cut[0]), *t1 = tree_of(cut[1]);
+        CHECK_MSG(tw->budget_cut == -INFINITY && t0->budget_cut > 0.0 && !t0->budget_rebuilt,
+                  "%s: the estimate did not cut (cut %g, rebuilt %d)", scenes[i], t0->budget_cut,
+                  t0->budget_rebuilt);
+        CHECK_MSG(same_tree(tw, t0), "%s: the tree with the estimate differs", scenes[i]);
+        CHECK_MSG(same_tree(t0, t1) && t0->budget_cut == t1->budget_cut,
+                  "%s: 1 and 3 threads build different trees", scenes[i]);
+        if (i < 2) /* the same trees as without the estimate: a check of the rays too */
+            check_exact_accel(s, scenes[i], cut, ray_count(10000), 4717 + (uint64_t)i);
+        bsp_accel_destroy(whole);
+        bsp_accel_destroy(cut[0]);
+        bsp_accel_destroy(cut[1]);
+        bsp_scene_destroy(s);
+    }
 }
 
 static void check_exact_opts(const bsp_scene *s, const char *name, bsp_build_options o, int nrays,

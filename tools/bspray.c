@@ -592,6 +592,11 @@ static int cmd_stats(int argc, char **argv)
         printf("  model cost     %.3f (SAH under the build's costs, in traversal steps; no\n"
                "                 mailbox term)\n",
                t.model_cost);
+        if (t.budget_cut > 0.0)
+            printf("  leaf budget    splits saving < %.3g per ray of the root skipped (estimate)\n",
+                   t.budget_cut);
+        else if (t.budget_rebuilt)
+            printf("  leaf budget    estimate too high: built again without it\n");
         if (check) {
             bsp_error err;
             if (bsp_accel_check(accel, &err) == BSP_OK) {

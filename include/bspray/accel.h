@@ -119,6 +119,11 @@ typedef struct bsp_build_options {
                                 (docs/kdtree.md). 0: the default, negative: no budget */
     size_t sah_leaf_budget_min; /* sah family: the budget is never below this many
                                    leaves (0: the default, 131072: 2 MiB of nodes) */
+    int sah_budget_no_estimate; /* sah family with a leaf budget: 0 (default) estimates
+                                   the budget's threshold from a sample of subtrees and
+                                   does not make the splits below it (the same tree,
+                                   built faster; docs/kdtree.md); 1 builds the whole
+                                   tree before pruning it */
     int sah_split_to_limits; /* sah family: 1 splits every node until max_depth or
                                 max_leaf_prims ends it (the paper's termination criteria);
                                 0 (default): also a leaf when the best split does not pay */
@@ -191,6 +196,12 @@ typedef struct bsp_tree_stats {
                              node, T_i per reference (bsp_build_options.sah_costs resolved:
                              the calibrated defaults where 0, also for kaplan), surface
                              area, without the mailbox term; in units of C_trav */
+    double budget_cut;    /* sah with a leaf budget (bsp_build_options.sah_leaf_budget):
+                             the splits saving less than this (per ray of the root, in
+                             units of C_trav) were not made, the budget's estimate
+                             having shown that the budget prunes them; 0: none */
+    int budget_rebuilt;   /* 1: that estimate proved too high and the tree was built
+                             again without it */
 } bsp_tree_stats;
 
 void bsp_accel_tree_stats(const bsp_accel *accel, bsp_tree_stats *stats);

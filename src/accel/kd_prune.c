@@ -44,6 +44,7 @@
 #include <string.h>
 
 #include "accel/kd_prune.h"
+#include "util/sorted_count.h"
 
 /* The value of rank K (0-based) in A[0..N) sorted in decreasing order
  * (K < N); reorders A. Quickselect with a median-of-three pivot and a
@@ -132,15 +133,13 @@ static void write_node(prune_out *o, uint32_t v, uint32_t to)
     write_node(o, kd_child(x) + 1, c + 1);
 }
 
-double kd_prune_threshold(const kd_tree *t, size_t max_leaves, double *m, double *scratch)
+/* Appends to OUT the value of each interior node of T (its saving and its
+ * strict ancestors' least, min(s_v, m(v))), the root's chain being ROOT_M;
+ * leaves M[v] = m(v) for every node. Returns the count appended. */
+static size_t chain_values(const kd_tree *t, double root_m, double *m, double *out)
 {
-    size_t pairs = (max_leaves > 0 ? max_leaves : 1) - 1; /* child pairs kept */
-    if (2 * pairs + 1 >= t->nnodes)
-        return -INFINITY;
-    /* the value of each pair of children (both share it), gathered in
-     * SCRATCH: the rank of the first pair that must go is PAIRS */
-    size_t np = 0;
-    m[0] = INFINITY;
+    size_t k = 0;
+    m[0] = root_m;
     for (uint32_t v = 0; v < t->nnodes; v++) {
         const kd_node *x = &t->nodes[v];
         if (kd_is_leaf(x))
@@ -148,8 +147,19 @@ double kd_prune_threshold(const kd_tree *t, size_t max_leaves, double *m, double
         double s = t->saving[v];
         double below = s < m[v] ? s : m[v]; /* NaN would keep nothing below */
         m[kd_child(x)] = m[kd_child(x) + 1] = below;
-        scratch[np++] = below;
+        out[k++] = below;
     }
+    return k;
+}
+
+double kd_prune_threshold(const kd_tree *t, size_t max_leaves, double *m, double *scratch)
+{
+    size_t pairs = (max_leaves > 0 ? max_leaves : 1) - 1; /* child pairs kept */
+    if (2 * pairs + 1 >= t->nnodes)
+        return -INFINITY;
+    /* the value of each pair of children (both share it), gathered in
+     * SCRATCH: the rank of the first pair that must go is PAIRS */
+    size_t np = chain_values(t, INFINITY, m, scratch);
     double q = select_desc(scratch, np, pairs); /* the first value that must go */
     double theta = INFINITY;                    /* the least value above q */
     for (size_t i = 0; i < pairs; i++)          /* select_desc left them in front */
@@ -158,11 +168,13 @@ double kd_prune_threshold(const kd_tree *t, size_t max_leaves, double *m, double
     return theta;
 }
 
-int kd_prune_to_leaves(kd_tree *t, size_t max_leaves)
+int kd_prune_to_leaves(kd_tree *t, size_t max_leaves, double cut)
 {
     size_t leaves = ((size_t)t->nnodes + 1) / 2; /* a full binary tree */
-    if (leaves <= max_leaves || !t->saving)
+    if (!t->saving)
         return 1;
+    if (leaves <= max_leaves)
+        return cut > -INFINITY ? -1 : 1;
     double *m = malloc((size_t)t->nnodes * sizeof *m);
     double *scratch = malloc((size_t)t->nnodes * sizeof *scratch);
     if (!m || !scratch) {
@@ -171,6 +183,18 @@ int kd_prune_to_leaves(kd_tree *t, size_t max_leaves)
         return 0;
     }
     double theta = kd_prune_threshold(t, max_leaves, m, scratch);
+    if (cut > -INFINITY) {
+        /* the tree the cut would have kept (its leaves: 1 + the interior
+         * nodes whose values, in SCRATCH, reach it) must exceed the budget */
+        size_t interior = ((size_t)t->nnodes - 1) / 2, above = 0;
+        for (size_t i = 0; i < interior; i++)
+            above += scratch[i] >= cut;
+        if (above + 1 <= max_leaves) {
+            free(m);
+            free(scratch);
+            return -1;
+        }
+    }
     size_t kept = 2 * (max_leaves > 0 ? max_leaves : 1) - 1; /* at most */
     free(m);
     free(scratch);
@@ -191,4 +215,131 @@ int kd_prune_to_leaves(kd_tree *t, size_t max_leaves)
     t->nprims = o.nprims;
     t->cap_prims = t->nprims ? t->nprims : 1;
     return 1;
+}
+
+/* --- the estimate of the threshold from a built sample ------------------------------------- */
+
+static int cmp_double(const void *x, const void *y)
+{
+    double a = *(const double *)x, b = *(const double *)y;
+    return (a > b) - (a < b);
+}
+
+typedef struct estimate_sets {
+    double *top, *exact, *pooled; /* sorted ascending */
+    size_t ntop, nexact, npooled;
+    double *chain;   /* unbuilt parts: their chains' least saving, ascending */
+    double *weight;  /* weight[i]: the primitives of the unbuilt parts with chain >= chain[i] */
+    size_t nunbuilt;
+    double built_n;  /* the built parts' primitives */
+} estimate_sets;
+
+/* The estimated leaves of the tree pruned at THETA. */
+static double leaves_at(const estimate_sets *e, double theta)
+{
+    double c = 1.0 + (double)sorted_count_at_least(e->top, e->ntop, theta) +
+               (double)sorted_count_at_least(e->exact, e->nexact, theta);
+    size_t u = sorted_count_at_least(e->chain, e->nunbuilt, theta);
+    if (u > 0)
+        c += e->weight[e->nunbuilt - u] / e->built_n *
+             (double)sorted_count_at_least(e->pooled, e->npooled, theta);
+    return c;
+}
+
+double kd_prune_estimate(const kd_tree *top, const kd_budget_part *parts, size_t np,
+                         size_t max_leaves)
+{
+    size_t nodes = top->nnodes, values = top->nnodes;
+    double built_n = 0.0;
+    size_t nunbuilt = 0;
+    for (size_t i = 0; i < np; i++) {
+        if (parts[i].sub) {
+            nodes = parts[i].sub->nnodes > nodes ? parts[i].sub->nnodes : nodes;
+            values += 2 * (size_t)parts[i].sub->nnodes;
+            built_n += (double)parts[i].n;
+        } else {
+            nunbuilt++;
+        }
+    }
+    if (!(built_n > 0.0))
+        return -INFINITY;
+    estimate_sets e;
+    memset(&e, 0, sizeof e);
+    double *m = malloc(nodes * sizeof *m), *mtop = malloc(top->nnodes * sizeof *mtop);
+    double *buf = malloc(values * sizeof *buf);
+    double *chain = malloc((nunbuilt + 1) * 2 * sizeof *chain);
+    double theta = 0.0;
+    if (!m || !mtop || !buf || !chain)
+        goto out;
+    e.top = buf;
+    e.ntop = chain_values(top, INFINITY, mtop, e.top);
+    e.exact = e.top + e.ntop;
+    for (size_t i = 0; i < np; i++) /* within the part, then under the top's chain */
+        if (parts[i].sub) {
+            size_t k = chain_values(parts[i].sub, mtop[parts[i].node], m, e.exact + e.nexact);
+            e.nexact += k;
+        }
+    e.pooled = e.exact + e.nexact;
+    for (size_t i = 0; i < np; i++)
+        if (parts[i].sub)
+            e.npooled += chain_values(parts[i].sub, INFINITY, m, e.pooled + e.npooled);
+    /* the unbuilt parts by chain, with the primitives of those at or above each */
+    e.chain = chain;
+    e.weight = chain + nunbuilt + 1;
+    for (size_t i = 0; i < np; i++)
+        if (!parts[i].sub)
+            e.chain[e.nunbuilt++] = mtop[parts[i].node];
+    qsort(e.chain, e.nunbuilt, sizeof *e.chain, cmp_double);
+    {
+        /* each part's n at its chain's first place in the sorted array (parts
+         * of equal chains share it), then suffix sums */
+        double *w = e.weight;
+        for (size_t i = 0; i < e.nunbuilt; i++)
+            w[i] = 0.0;
+        for (size_t i = 0; i < np; i++)
+            if (!parts[i].sub)
+                w[e.nunbuilt - sorted_count_at_least(e.chain, e.nunbuilt, mtop[parts[i].node])] +=
+                    (double)parts[i].n;
+        for (size_t i = e.nunbuilt; i-- > 1;)
+            w[i - 1] += w[i];
+    }
+    e.built_n = built_n;
+    qsort(e.top, e.ntop, sizeof *e.top, cmp_double);
+    qsort(e.exact, e.nexact, sizeof *e.exact, cmp_double);
+    qsort(e.pooled, e.npooled, sizeof *e.pooled, cmp_double);
+    if (leaves_at(&e, -INFINITY) <= (double)max_leaves) {
+        theta = -INFINITY;
+        goto out;
+    }
+    /* the least candidate theta at which the estimate meets the budget: the
+     * count changes only at the values (the chains are values of the top) */
+    {
+        double *cand = m; /* no longer needed: reuse for the merged candidates */
+        size_t nc = e.ntop + e.nexact + e.npooled;
+        if (nc > nodes) {
+            double *nb = realloc(m, nc * sizeof *nb);
+            if (!nb) {
+                theta = 0.0;
+                goto out;
+            }
+            m = cand = nb;
+        }
+        memcpy(cand, buf, nc * sizeof *cand);
+        qsort(cand, nc, sizeof *cand, cmp_double);
+        size_t lo = 0, hi = nc; /* leaves_at(cand[hi]) <= budget, or hi = nc */
+        while (lo < hi) {
+            size_t mid = lo + (hi - lo) / 2;
+            if (leaves_at(&e, cand[mid]) <= (double)max_leaves)
+                hi = mid;
+            else
+                lo = mid + 1;
+        }
+        theta = lo < nc ? cand[lo] : INFINITY;
+    }
+out:
+    free(m);
+    free(mtop);
+    free(buf);
+    free(chain);
+    return theta;
 }

@@ -9,6 +9,7 @@
 
 #include "accel/kd_raycount.h"
 #include "util/insertion_sort.h"
+#include "util/sorted_count.h"
 
 /* Clips the part [*TA, *TB] of the segment OD (origin, direction) to box
  * B; 0 when nothing is left. */
@@ -269,7 +270,7 @@ int kd_raycount_enter(kd_raycount_cursor *c, const bsp_box *cell)
     return 1;
 }
 
-/* How many of the N sorted values V are <= X, and how many are >= X. */
+/* How many of the N sorted values V are <= X (>= X: sorted_count_at_least). */
 static size_t count_le(const double *v, size_t n, double x)
 {
     size_t lo = 0, hi = n;
@@ -283,18 +284,6 @@ static size_t count_le(const double *v, size_t n, double x)
     return lo;
 }
 
-static size_t count_ge(const double *v, size_t n, double x)
-{
-    size_t lo = 0, hi = n;
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (v[mid] < x)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return n - lo;
-}
 
 double kd_raycount_measure(const kd_raycount_cursor *c, const bsp_box *b)
 {
@@ -318,7 +307,7 @@ double kd_raycount_measure(const kd_raycount_cursor *c, const bsp_box *b)
         return (double)e->n;
     if (moved == 1)
         return upper ? (double)count_le(e->lo[axis], e->n, b->hi.v[axis])
-                     : (double)count_ge(e->hi[axis], e->n, b->lo.v[axis]);
+                     : (double)sorted_count_at_least(e->hi[axis], e->n, b->lo.v[axis]);
     size_t n = 0;
     for (size_t i = 0; i < e->n; i++) {
         double ta = e->ta[i], tb = e->tb[i];

@@ -111,6 +111,15 @@ typedef struct sah_tasks {
                             ancestor becomes a task (independent of the thread count,
                             so every thread count builds the same array) */
     sah_pool *pool;      /* the workers (NULL: the tasks wait for kd_sah_finish_tasks) */
+    /* The leaf budget's estimate (kd_prune_estimate): with probe_every > 0,
+     * tasks number 0, K, 2K, ... (K = probe_every) are built first, in full;
+     * from them and the top of the tree the budget's threshold is estimated,
+     * and the other tasks are built with a least saving of raised (splits
+     * below it would be pruned anyway). 0: no estimate, every task in full. */
+    size_t probe_every;
+    size_t budget;       /* the leaf budget the estimate is for */
+    double raised;       /* out: the least saving the other tasks were built with
+                            (-inf: none; b->min_saving applied as ever) */
 } sah_tasks;
 
 typedef struct sah_build {
@@ -127,6 +136,9 @@ typedef struct sah_build {
     double bonus_mul;   /* 1 - empty bonus */
     double min_saving;  /* the least saving of a split that pays, in cost units per ray
                            of the root: kd_cost_model.min_saving times the mean T_i */
+    double min_saving_sure; /* the same, >= min_saving, for a node with no speculative
+                               ancestor (bad == 0): raised by the leaf budget's estimate
+                               in the tasks built after it (sah_tasks.raised) */
     double inv_root_area; /* 1 / the root cell's surface area */
     int record_savings;   /* record every split's saving in t->saving (kd_prune.h) */
     int mailbox;        /* mailbox-aware costs (kd_cost_model.mailbox) */

@@ -22,9 +22,11 @@
  * listed, then to the one worker that takes it, then, after the join, to the
  * main thread again.
  */
+#include <math.h>
 #include <pthread.h>
 #include <unistd.h>
 
+#include "accel/kd_prune.h"
 #include "accel/kd_sah.h"
 
 struct sah_task {
@@ -35,6 +37,8 @@ struct sah_task {
     int depth, surface;
     uint64_t *ev;  /* its three lists (axis k at k * 2n), then room to grow */
     kd_tree sub;   /* its subtree, root at 0 */
+    int probe;     /* built first, for the leaf budget's estimate (sah_tasks.probe_every) */
+    double min_saving_sure; /* > the build's: its raised least saving (sah_build) */
     bsp_status st;
     bsp_error err;
 };
@@ -51,7 +55,11 @@ struct sah_pool {
     pthread_mutex_t lock;
     pthread_cond_t more; /* a task was listed, or the pool closed */
     sah_tasks *tasks;
-    size_t next;         /* the next task to take */
+    size_t next;         /* the next task to take (not a probe) */
+    size_t next_probe;   /* where to look for the next probe to take */
+    size_t probes_taken, probes_done; /* probes taken by a thread, and built */
+    int estimated;       /* the estimate is made (or none is wanted): every task may go */
+    pthread_cond_t done; /* a probe was built */
     int closed;          /* the main build is over: no task will be listed */
     int abort;           /* ... and it failed: build no more tasks */
     int started;         /* worker threads running */
@@ -63,6 +71,18 @@ struct sah_pool {
 static bsp_status task_oom(bsp_error *err)
 {
     return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
+}
+
+/* Whether task I is a probe of the leaf budget's estimate: one in
+ * probe_every, drawn by a hash of I (every K-th task in order can alias with
+ * a regular scene: on shells it sampled a threshold 2.5x too high). */
+static int is_probe(const sah_tasks *ts, size_t i)
+{
+    uint64_t h = (uint64_t)i * 0x9e3779b97f4a7c15ull;
+    h ^= h >> 29;
+    h *= 0xbf58476d1ce4e5b9ull;
+    h ^= h >> 32;
+    return ts->probe_every && h % ts->probe_every == 0;
 }
 
 /* Lists TK as task number ts->n (under the pool's lock when there is one).
@@ -83,8 +103,10 @@ static int list_task(sah_tasks *ts, sah_task *tk)
             ok = 0;
         }
     }
-    if (ok)
+    if (ok) {
+        tk->probe = is_probe(ts, ts->n);
         ts->v[ts->n++] = tk;
+    }
     if (pool) {
         pthread_cond_signal(&pool->more);
         pthread_mutex_unlock(&pool->lock);
@@ -162,39 +184,82 @@ static void run_task(sah_build *w, sah_task *tk)
     if (w->descent)
         w->descent->reset(w->dctx);
     double cost;
+    const double sure = w->min_saving_sure;
+    if (tk->min_saving_sure > sure)
+        w->min_saving_sure = tk->min_saving_sure;
     tk->st = kd_sah_build_node(w, 0, tk->cell, L, 6 * tk->n, tk->depth, 0, tk->surface, &cost);
+    w->min_saving_sure = sure;
     free(w->ev);
     w->ev = NULL;
     w->cap = 0;
     w->t = (kd_tree *)main_t;
 }
 
-/* Builds tasks from POOL until it is closed and none is left (or it is
- * aborted), with scratch of its own. */
-static void *worker(void *arg)
+
+/* The next task for a thread to build, under the pool's lock: a probe while
+ * there is one, else (unless ONLY_PROBES) any other, in task order; waits
+ * while none is listed yet. A task taken before the estimate is made is
+ * built in full, like a probe: the tree is the same either way (kd_prune.h),
+ * and the thread would otherwise wait for the main build. NULL when there
+ * is nothing more for it: the pool is closed, the estimate made (unless
+ * ONLY_PROBES) and the tasks it may take taken, or the build failed. */
+static sah_task *take_task(sah_pool *pool, int only_probes)
 {
-    sah_pool *pool = arg;
     sah_tasks *ts = pool->tasks;
+    sah_task *tk = NULL;
+    pthread_mutex_lock(&pool->lock);
+    while (!pool->abort) {
+        while (pool->next_probe < ts->n && !ts->v[pool->next_probe]->probe)
+            pool->next_probe++;
+        if (pool->next_probe < ts->n) {
+            tk = ts->v[pool->next_probe++];
+            pool->probes_taken++;
+            break;
+        }
+        if (!only_probes) { /* before the estimate: built in full, as a probe is */
+            while (pool->next < ts->n && ts->v[pool->next]->probe)
+                pool->next++;
+            if (pool->next < ts->n) {
+                tk = ts->v[pool->next++];
+                break;
+            }
+        }
+        if (pool->closed && (only_probes || pool->estimated))
+            break;
+        pthread_cond_wait(&pool->more, &pool->lock);
+    }
+    pthread_mutex_unlock(&pool->lock);
+    return tk;
+}
+
+/* Builds tasks from POOL (see take_task) with scratch of its own; 0 when
+ * it could not make that scratch (and so built none). */
+static int run_tasks(sah_pool *pool, int only_probes)
+{
     sah_build w = pool->proto;
     w.cls = calloc((size_t)w.spare + 1, 1);
     if (w.descent) /* a measure context of its own */
         w.actx = w.dctx = w.descent->thread_ctx(w.shared_actx);
     int ready = w.cls && (!w.descent || w.dctx); /* if not, the other threads take the tasks */
-    while (ready) {
-        sah_task *tk = NULL;
-        pthread_mutex_lock(&pool->lock);
-        while (pool->next >= ts->n && !pool->closed)
-            pthread_cond_wait(&pool->more, &pool->lock);
-        if (!pool->abort && pool->next < ts->n)
-            tk = ts->v[pool->next++];
-        pthread_mutex_unlock(&pool->lock);
-        if (!tk)
-            break;
+    sah_task *tk;
+    while (ready && (tk = take_task(pool, only_probes)) != NULL) {
         run_task(&w, tk);
+        if (tk->probe) {
+            pthread_mutex_lock(&pool->lock);
+            pool->probes_done++;
+            pthread_cond_broadcast(&pool->done);
+            pthread_mutex_unlock(&pool->lock);
+        }
     }
     kd_sah_scratch_free(&w);
     if (w.descent && w.dctx)
         w.descent->free_ctx(w.dctx);
+    return ready;
+}
+
+static void *worker(void *arg)
+{
+    (void)run_tasks(arg, 0); /* if it cannot, the other threads take the tasks */
     return NULL;
 }
 
@@ -215,7 +280,14 @@ static sah_pool *pool_create(const sah_build *b, sah_tasks *ts)
         free(pool);
         return NULL;
     }
+    if (pthread_cond_init(&pool->done, NULL) != 0) {
+        pthread_cond_destroy(&pool->more);
+        pthread_mutex_destroy(&pool->lock);
+        free(pool);
+        return NULL;
+    }
     pool->tasks = ts;
+    pool->estimated = ts->probe_every == 0;
     pool->limits.max_depth = b->t->max_depth;
     pool->limits.max_leaf_prims = b->t->max_leaf_prims;
     pool->limits.pad = b->t->pad;
@@ -243,6 +315,7 @@ static sah_pool *pool_create(const sah_build *b, sah_tasks *ts)
 
 static void pool_destroy(sah_pool *pool)
 {
+    pthread_cond_destroy(&pool->done);
     pthread_cond_destroy(&pool->more);
     pthread_mutex_destroy(&pool->lock);
     free(pool);
@@ -297,6 +370,49 @@ static int splice(kd_tree *t, const sah_task *tk)
     return 1;
 }
 
+/* The leaf budget's estimate, once the top of the tree and the probes are
+ * built (every probe succeeded or the build has failed): the raised least
+ * saving for the tasks not yet taken, KD_BUDGET_SAFETY times the estimated
+ * threshold, when that is above the build's (ts->raised; else -inf). 0 when
+ * out of memory. */
+static int raise_least_saving(const sah_build *b, sah_tasks *ts)
+{
+    ts->raised = -INFINITY;
+    size_t probes = 0;
+    for (size_t i = 0; i < ts->n; i++) {
+        if (ts->v[i]->probe && ts->v[i]->st != BSP_OK)
+            return 1; /* the build fails anyway */
+        probes += (size_t)ts->v[i]->probe;
+    }
+    if (probes < KD_BUDGET_MIN_PROBES)
+        return 1; /* too few to tell */
+    kd_budget_part *parts = malloc((ts->n ? ts->n : 1) * sizeof *parts);
+    if (!parts)
+        return 0;
+    /* from all probes, and from each half of them (alternate probes) */
+    double theta[3];
+    for (int h = 0; h < 3; h++) {
+        size_t probe_i = 0;
+        for (size_t i = 0; i < ts->n; i++) {
+            const sah_task *tk = ts->v[i];
+            int use = tk->probe && (h == 0 || (int)(probe_i % 2) == h - 1);
+            probe_i += (size_t)tk->probe;
+            parts[i].node = tk->node;
+            parts[i].n = tk->n;
+            parts[i].sub = use ? &tk->sub : NULL;
+        }
+        theta[h] = kd_prune_estimate(b->t, parts, ts->n, ts->budget);
+    }
+    free(parts);
+    double lo = fmin(theta[0], fmin(theta[1], theta[2]));
+    double hi = fmax(theta[0], fmax(theta[1], theta[2]));
+    double raised = KD_BUDGET_SAFETY * lo;
+    if (!(hi <= KD_BUDGET_SPREAD * lo) || !(raised > b->min_saving))
+        return 1; /* the samples disagree too much to trust, or nothing to raise */
+    ts->raised = raised;
+    return 1;
+}
+
 bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
 {
     sah_tasks *ts = b->tasks;
@@ -313,8 +429,28 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
         pool->abort = st != BSP_OK;
         pthread_cond_broadcast(&pool->more);
         pthread_mutex_unlock(&pool->lock);
+        if (st == BSP_OK && !pool->estimated) {
+            /* the probes, with the workers: when this thread finds none left
+             * to take, every one is taken; then wait for those still built */
+            if (!run_tasks(pool, 1))
+                st = task_oom(b->err);
+            pthread_mutex_lock(&pool->lock);
+            while (pool->probes_done < pool->probes_taken)
+                pthread_cond_wait(&pool->done, &pool->lock);
+            pthread_mutex_unlock(&pool->lock);
+            if (st == BSP_OK && !raise_least_saving(b, ts))
+                st = task_oom(b->err);
+            pthread_mutex_lock(&pool->lock);
+            for (size_t i = pool->next; i < ts->n && ts->raised > -INFINITY; i++)
+                if (!ts->v[i]->probe) /* not taken yet: taking moves pool->next */
+                    ts->v[i]->min_saving_sure = ts->raised;
+            pool->estimated = 1;
+            pool->abort = st != BSP_OK;
+            pthread_cond_broadcast(&pool->more);
+            pthread_mutex_unlock(&pool->lock);
+        }
         if (st == BSP_OK)
-            worker(pool);
+            (void)run_tasks(pool, 0); /* if it cannot, a task left unbuilt fails the build */
         for (int i = 0; i < pool->started; i++)
             pthread_join(pool->tid[i], NULL);
         pool_destroy(pool);
@@ -335,6 +471,8 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
         free(ts->v[i]);
     }
     free(ts->v);
+    const double raised = ts->raised;
     memset(ts, 0, sizeof *ts);
+    ts->raised = raised; /* the caller's to read */
     return st;
 }

@@ -290,12 +290,22 @@ static void merge_back(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn)
  * have built. Deep in a tree most nodes are this small and most end as
  * leaves. */
 static int no_split_saves_enough(const sah_build *b, const bsp_box *cell, double tsum, size_t n,
-                                 int bad)
+                                 int bad, double min_saving)
 {
     if (b->to_limits || (bad < MAX_BAD_REFINES && n >= MIN_BAD_REFINE_PRIMS))
         return 0;
     return kd_surface_area(cell) * b->inv_root_area * (tsum - kd_sweep_linear_least_cost(b)) <
-           b->min_saving;
+           min_saving;
+}
+
+/* The least saving of a split at a node after BAD bad refines. Below a
+ * speculative split the plain one: that subtree's actual cost decides its
+ * retraction and its recorded saving, so it is built as without a leaf
+ * budget's estimate. Elsewhere a split saving less than the estimate's
+ * raised least saving would be pruned with its subtree (kd_prune.h). */
+static inline double node_min_saving(const sah_build *b, int bad)
+{
+    return bad ? b->min_saving : b->min_saving_sure;
 }
 
 /* Builds the subtree of NODE over CELL from the lists L; ev[top, ...) is
@@ -330,7 +340,7 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     split_choice best = {INFINITY, 0, 0.0f, 0};
     double inv_area = (surface ? 2.0 : 1.0) / area; /* the sweep uses half areas */
     if (surface && b->linear) {
-        if (no_split_saves_enough(b, &cell, tsum, n, bad))
+        if (no_split_saves_enough(b, &cell, tsum, n, bad, node_min_saving(b, bad)))
             return make_leaf(b, node, b->ev + L.base, n);
         kd_sweep_linear(b, b->ev + L.base, L.stride, n, tsum, &cell, inv_area, &best);
     } else {
@@ -345,7 +355,7 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
      * it is not worth a node (the uniform-line probability of the cell, by
      * surface area, whatever the build's measure) */
     const double share = kd_surface_area(&cell) * b->inv_root_area;
-    if (best.cost < tsum && !b->to_limits && share * (tsum - best.cost) < b->min_saving)
+    if (best.cost < tsum && !b->to_limits && share * (tsum - best.cost) < node_min_saving(b, bad))
         return make_leaf(b, node, b->ev + L.base, n);
     if (t->saving) /* a bad refine's is its subtree's, below */
         t->saving[node] = share * (tsum - best.cost);
@@ -565,6 +575,61 @@ static void quantize_costs(double *c, size_t n)
 
 /* --- entry points ------------------------------------------------------------------------------ */
 
+/* One build of the tree B->t over the N live primitives (of NP; cost sum
+ * TSUM) from fresh root lists, with its tasks (on the threads O asks for);
+ * with ESTIMATE, the leaf budget BUDGET's estimate raises the least saving
+ * of the tasks built after it, *RAISED (else -inf). The savings are recorded
+ * when b->record_savings; the tree is not pruned here. */
+static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n, size_t np,
+                             double tsum, size_t budget, int estimate, double *raised)
+{
+    kd_tree *t = b->t;
+    b->min_saving_sure = b->min_saving;
+    b->cls = calloc(np + 1, 1); /* + 1: the spare slot */
+    b->cap = 12 * n + 1024;     /* the root's lists and a radix buffer, then room to grow */
+    b->ev = malloc(b->cap * sizeof *b->ev);
+    if (!b->cls || !b->ev || (b->record_savings && !kd_tree_record_savings(t))) {
+        kd_sah_scratch_free(b);
+        return oom(b);
+    }
+    /* the root's events, made in primitive order, then sorted once */
+    const size_t m = 2 * n;
+    for (unsigned k = 0; k < 3; k++) {
+        uint64_t *e = b->ev + k * m;
+        size_t i = 0;
+        for (uint32_t p = 0; p < np; p++) {
+            if (b->scene->prims[p].shape == SHAPE_NONE)
+                continue;
+            bsp_box pb = b->bounds[p]; /* padded as kd_prim_box pads */
+            pb.lo.v[k] -= t->pad;
+            pb.hi.v[k] += t->pad;
+            uint64_t cls = b->pclass ? (uint64_t)b->pclass[p] << EV_CLASS_SHIFT : 0;
+            e[i++] = make_event(round_down(pb.lo.v[k]), 1, p) | cls;
+            e[i++] = make_event(round_up(pb.hi.v[k]), 0, p) | cls;
+        }
+        radix_sort(e, b->ev + 3 * m, m);
+    }
+    node_lists root = {0, m, n, tsum};
+    /* subtrees of n/64 (at least 512) primitives and down to an eighth of that
+     * are built as tasks, on the threads asked for */
+    sah_tasks tasks;
+    memset(&tasks, 0, sizeof tasks);
+    tasks.max_n = n / 64 > 512 ? n / 64 : 512;
+    tasks.min_n = tasks.max_n / 8;
+    tasks.probe_every = estimate ? KD_BUDGET_PROBE_EVERY : 0;
+    tasks.budget = budget;
+    tasks.raised = -INFINITY;
+    b->tasks = &tasks;
+    kd_sah_start_workers(b, kd_build_threads(o), n);
+    double cost;
+    bsp_status st = kd_sah_build_node(b, 0, t->box, root, 3 * m, 0, 0, b->surface, &cost);
+    st = kd_sah_finish_tasks(b, st);
+    *raised = tasks.raised;
+    kd_sah_scratch_free(b);
+    return st;
+}
+
+
 void kd_sah_default_limits(bsp_build_options *o, const bsp_scene *scene)
 {
     size_t n = bsp_scene_prim_count(scene) - bsp_scene_kind_count(scene, BSP_PRIM_DROPPED);
@@ -609,12 +674,9 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     if (descent && !(b.actx = b.dctx = descent->thread_ctx(ctx)))
         return oom(&b);
 
-    b.cls = calloc(np + 1, 1); /* + 1: the spare slot */
     b.bounds = malloc(np * sizeof *b.bounds);
     b.spare = (uint32_t)np;
-    b.cap = 12 * n + 1024; /* the root's lists and a radix buffer, then room to grow */
-    b.ev = malloc(b.cap * sizeof *b.ev);
-    if (!b.cls || !b.ev || !b.bounds) {
+    if (!b.bounds) {
         st = oom(&b);
         goto done;
     }
@@ -671,26 +733,10 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
         }
     }
 
-    /* the root's events, made in primitive order, then sorted once */
-    const size_t m = 2 * n;
-    for (unsigned k = 0; k < 3; k++) {
-        uint64_t *e = b.ev + k * m;
-        size_t i = 0;
-        for (uint32_t p = 0; p < np; p++) {
-            if (scene->prims[p].shape == SHAPE_NONE)
-                continue;
-            if (k == 0)
-                b.bounds[p] = bsp_scene_prim_bounds(scene, p);
-            bsp_box pb = b.bounds[p]; /* padded as kd_prim_box pads */
-            pb.lo.v[k] -= t->pad;
-            pb.hi.v[k] += t->pad;
-            uint64_t cls = b.pclass ? (uint64_t)b.pclass[p] << EV_CLASS_SHIFT : 0;
-            e[i++] = make_event(round_down(pb.lo.v[k]), 1, p) | cls;
-            e[i++] = make_event(round_up(pb.hi.v[k]), 0, p) | cls;
-        }
-        radix_sort(e, b.ev + 3 * m, m);
-    }
-    double tsum = 0.0, cost, tmin = INFINITY;
+    for (uint32_t p = 0; p < np; p++)
+        if (scene->prims[p].shape != SHAPE_NONE)
+            b.bounds[p] = bsp_scene_prim_bounds(scene, p);
+    double tsum = 0.0, tmin = INFINITY;
     for (uint32_t p = 0; p < np; p++)
         if (scene->prims[p].shape != SHAPE_NONE) {
             double tp = b.cost ? b.cost[p] : b.unif;
@@ -698,29 +744,33 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
             tmin = tp < tmin ? tp : tmin;
         }
     b.linear = !b.mailbox || tmin >= b.mb_hit;
-    b.min_saving = n > 0 ? cm.min_saving * tsum / (double)n : 0.0;
+    b.min_saving = b.min_saving_sure = n > 0 ? cm.min_saving * tsum / (double)n : 0.0;
     b.inv_root_area = 1.0 / kd_surface_area(&t->box);
-    node_lists root = {0, m, n, tsum};
-    /* subtrees of n/64 (at least 512) primitives and down to an eighth of that
-     * are built as tasks, on the threads asked for */
-    sah_tasks tasks;
-    memset(&tasks, 0, sizeof tasks);
-    tasks.max_n = n / 64 > 512 ? n / 64 : 512;
-    tasks.min_n = tasks.max_n / 8;
-    b.tasks = &tasks;
     /* a leaf budget: record the splits' savings, prune afterwards */
     b.record_savings = cm.leaf_budget > 0.0 && !b.to_limits;
-    if (b.record_savings && !kd_tree_record_savings(t)) {
-        st = oom(&b);
-        goto done;
-    }
-    kd_sah_start_workers(&b, kd_build_threads(o), n);
-    st = kd_sah_build_node(&b, 0, t->box, root, 3 * m, 0, 0, b.surface, &cost);
-    st = kd_sah_finish_tasks(&b, st);
-    if (st == BSP_OK && b.record_savings) {
+    size_t budget = 0;
+    if (b.record_savings) {
         double most = fmax(ceil(cm.leaf_budget * (double)n), (double)cm.leaf_budget_min);
-        if (!kd_prune_to_leaves(t, most < (double)KD_MAX_NODES ? (size_t)most : KD_MAX_NODES))
+        budget = most < (double)KD_MAX_NODES ? (size_t)most : KD_MAX_NODES;
+    }
+    /* With a budget, first with its estimate; when the estimate proves too
+     * high (the tree's threshold would lie at or below the raised least
+     * saving, so splits it cut might have stayed), once more without. */
+    int estimate = b.record_savings && !o->sah_budget_no_estimate;
+    for (;;) {
+        double raised = -INFINITY;
+        st = build_tree(&b, o, n, np, tsum, budget, estimate, &raised);
+        if (st != BSP_OK || !b.record_savings)
+            break;
+        int r = kd_prune_to_leaves(t, budget, raised);
+        if (r == 0)
             st = oom(&b);
+        t->budget_cut = r > 0 ? raised : -INFINITY;
+        if (r >= 0 || !estimate)
+            break;
+        estimate = 0; /* the estimate was too high: the tree without it */
+        t->budget_rebuilt = 1;
+        kd_tree_reset(t);
     }
 done:
     free(t->saving);

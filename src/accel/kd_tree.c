@@ -26,10 +26,20 @@ int kd_tree_init(kd_tree *t, const bsp_scene *scene, int max_depth, int max_leaf
     t->nodes = malloc(t->cap_nodes * sizeof *t->nodes);
     if (!t->nodes)
         return 0;
+    t->budget_cut = -INFINITY;
     t->nnodes = 1; /* the root */
     t->nodes[0].u.first = 0;
     t->nodes[0].bits = KD_LEAF_TAG; /* an empty leaf until built */
     return 1;
+}
+
+void kd_tree_reset(kd_tree *t)
+{
+    t->nnodes = 1;
+    t->nprims = 0;
+    t->over_limit = 0;
+    t->nodes[0].u.first = 0;
+    t->nodes[0].bits = KD_LEAF_TAG;
 }
 
 void kd_tree_free(kd_tree *t)
@@ -232,6 +242,8 @@ void kd_tree_stats(const kd_tree *t, const bsp_scene *scene, const bsp_sah_costs
     double root = box_is_empty(t->box) ? 0.0 : box_area(t->box);
     st->expected_cost = root > 0 ? w.cost / root : 0.0;
     st->model_cost = root > 0 ? w.model / root / costs->traversal : 0.0;
+    st->budget_cut = t->budget_cut > 0.0 ? t->budget_cut / costs->traversal : 0.0;
+    st->budget_rebuilt = t->budget_rebuilt;
 }
 
 /* --- invariant checker -------------------------------------------------------------- */

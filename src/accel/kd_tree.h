@@ -105,6 +105,10 @@ typedef struct kd_tree {
                          (kd_tree_record_savings): an interior node's saving per ray of
                          the root, by which a leaf budget ranks splits (kd_prune.h);
                          NULL: not recorded */
+    double budget_cut;  /* after an SAH build with a leaf budget: the least saving the
+                           budget's estimate let the build cut at (-inf: none) */
+    int budget_rebuilt; /* ... and 1 when the estimate proved too high and the tree
+                           was built again without it */
 } kd_tree;
 
 /* --- used by builders ------------------------------------------------------ */
@@ -112,6 +116,9 @@ typedef struct kd_tree {
 /* Room for NODES nodes in all (and their savings, when recorded); 0 when
  * out of memory or past KD_MAX_NODES or max_bytes. */
 HIDDEN int kd_reserve_nodes(kd_tree *t, size_t nodes);
+/* Makes T (built or not) its root alone again, an empty leaf, keeping its
+ * limits and its memory (a builder that starts over). */
+HIDDEN void kd_tree_reset(kd_tree *t);
 /* Starts recording every node's saving (t->saving); 0 when out of memory. */
 HIDDEN int kd_tree_record_savings(kd_tree *t);
 /* Appends two adjacent nodes and returns the index of the first, or
