@@ -722,8 +722,9 @@ TEST(sah_leaf_budget_prunes_to_the_budget)
 /* The leaf budget's estimate (kd_prune_estimate, kd_sah_tasks.c): the build
  * that skips the splits below the estimate's cut makes the very tree of the
  * build that makes every split and then prunes, on every thread count —
- * on scenes where the estimate does cut (budget_cut > 0). Fails when the
- * cut also applies below a speculative split (shells). */
+ * on scenes where the estimate does cut (budget_cut > 0); a cut too high
+ * is found out and the tree built again. Fails when the cut also applies
+ * below a speculative split (shells). */
 TEST(sah_leaf_budget_estimate_builds_the_same_tree)
 {
     /* shells: bad refines, whose subtrees the estimate must leave alone */
@@ -736,9 +737,9 @@ TEST(sah_leaf_budget_estimate_builds_the_same_tree)
         o.sah_leaf_budget = 0.5;
         o.sah_leaf_budget_min = 1;
         o.threads = 1;
-        o.sah_budget_no_estimate = 1;
+        o.sah_budget_cut = -1.0;
         bsp_accel *whole = build(s, &o);
-        o.sah_budget_no_estimate = 0;
+        o.sah_budget_cut = 0.0;
         bsp_accel *cut[2];
         cut[0] = build(s, &o);
         o.threads = 3;
@@ -752,6 +753,16 @@ TEST(sah_leaf_budget_estimate_builds_the_same_tree)
                   "%s: 1 and 3 threads build different trees", scenes[i]);
         if (i < 2) /* the same trees as without the estimate: a check of the rays too */
             check_exact_accel(s, scenes[i], cut, ray_count(10000), 4717 + (uint64_t)i);
+        if (i == 0) { /* a cut far above the estimate: found out, and built again */
+            o.threads = 1;
+            o.sah_budget_cut = 50.0;
+            bsp_accel *again = build(s, &o);
+            const kd_tree *ta = tree_of(again);
+            CHECK_MSG(ta->budget_rebuilt && ta->budget_cut == -INFINITY && same_tree(tw, ta),
+                      "%s: a cut too high (rebuilt %d, cut %g)", scenes[i], ta->budget_rebuilt,
+                      ta->budget_cut);
+            bsp_accel_destroy(again);
+        }
         bsp_accel_destroy(whole);
         bsp_accel_destroy(cut[0]);
         bsp_accel_destroy(cut[1]);

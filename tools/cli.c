@@ -250,6 +250,11 @@ static int in_bonus_range(double x)
     return x >= 0.0 && x < 1.0;
 }
 
+static int positive_share(double x)
+{
+    return x > 0.0 && x <= 1e6;
+}
+
 static int in_saving_range(double x)
 {
     return x >= 0.0 && x < INFINITY;
@@ -268,9 +273,10 @@ static int in_saving_range(double x)
     "  --leaf-budget X    sah family: at most X leaves per primitive, X >= 0: a larger\n"          \
     "                     tree loses the splits that save least (default 1; 0: none)\n"            \
     "  --leaf-budget-min N  sah family: ... but never fewer than N leaves (default 131072)\n"  \
-    "  --budget-estimate on|off  sah family: estimate the budget's threshold from a sample\n"  \
-    "                     of subtrees and skip the splits below it (default on: the same\n"    \
-    "                     tree, built faster); off builds the whole tree, then prunes\n"
+    "  --budget-cut F|off sah family: estimate the budget's threshold from a sample of\n"     \
+    "                     subtrees and skip the splits saving less than F times it, F > 0\n" \
+    "                     (default 0.5; any F builds the same tree, a large one only\n"       \
+    "                     twice); off builds the whole tree, then prunes\n"
 
 int parse_cost_arg(args *a, cost_args *c)
 {
@@ -288,8 +294,10 @@ int parse_cost_arg(args *a, cost_args *c)
         c->leaf_budget = x > 0.0 ? x : -1.0; /* likewise */
     } else if (!strcmp(s, "--leaf-budget-min")) {
         c->leaf_budget_min = (size_t)parse_int(a, s, 1, 1 << 30);
-    } else if (!strcmp(s, "--budget-estimate")) {
-        c->budget_no_estimate = !parse_on_off(a, s);
+    } else if (!strcmp(s, "--budget-cut")) {
+        const char *v = opt_value(a, s);
+        c->budget_cut = !strcmp(v, "off") ? -1.0
+                                           : parse_real(a, s, v, positive_share, "a number > 0 or 'off'");
     } else {
         return 0;
     }
@@ -303,7 +311,7 @@ void apply_cost_args(const cost_args *c, bsp_build_options *o)
     o->sah_min_saving = c->min_saving;
     o->sah_leaf_budget = c->leaf_budget;
     o->sah_leaf_budget_min = c->leaf_budget_min;
-    o->sah_budget_no_estimate = c->budget_no_estimate;
+    o->sah_budget_cut = c->budget_cut;
 }
 
 const char build_args_help[] =
@@ -351,10 +359,10 @@ int parse_build_arg(args *a, bsp_build_options *opts)
         opts->mixed_check = parse_on_off(a, s);
     } else if (!strcmp(s, "--costs") || !strcmp(s, "--empty-bonus") || !strcmp(s, "--min-saving") ||
                !strcmp(s, "--leaf-budget") || !strcmp(s, "--leaf-budget-min") ||
-               !strcmp(s, "--budget-estimate")) {
+               !strcmp(s, "--budget-cut")) {
         cost_args c = {opts->sah_costs, opts->sah_empty_bonus, opts->sah_min_saving,
                        opts->sah_leaf_budget, opts->sah_leaf_budget_min,
-                       opts->sah_budget_no_estimate};
+                       opts->sah_budget_cut};
         parse_cost_arg(a, &c);
         apply_cost_args(&c, opts);
     } else if (!strcmp(s, "--mixed-share")) {

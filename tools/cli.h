@@ -48,7 +48,7 @@ int parse_build_arg(args *a, bsp_build_options *opts);
 extern const char build_args_help[];
 
 /* The SAH cost model of the command line: --costs, --empty-bonus,
- * --min-saving, --leaf-budget, --leaf-budget-min and --budget-estimate (also taken by
+ * --min-saving, --leaf-budget, --leaf-budget-min and --budget-cut (also taken by
  * parse_build_arg) for the commands that build
  * several structures (bench, bench --paper, bench --scaling, viz). */
 typedef struct cost_args {
@@ -57,7 +57,7 @@ typedef struct cost_args {
     double min_saving;   /* as bsp_build_options.sah_min_saving */
     double leaf_budget;  /* as bsp_build_options.sah_leaf_budget */
     size_t leaf_budget_min; /* as bsp_build_options.sah_leaf_budget_min */
-    int budget_no_estimate; /* as bsp_build_options.sah_budget_no_estimate */
+    double budget_cut;   /* as bsp_build_options.sah_budget_cut */
 } cost_args;
 /* Consumes one of those options like parse_build_arg. */
 int parse_cost_arg(args *a, cost_args *c);

@@ -119,11 +119,13 @@ typedef struct bsp_build_options {
                                 (docs/kdtree.md). 0: the default, negative: no budget */
     size_t sah_leaf_budget_min; /* sah family: the budget is never below this many
                                    leaves (0: the default, 131072: 2 MiB of nodes) */
-    int sah_budget_no_estimate; /* sah family with a leaf budget: 0 (default) estimates
-                                   the budget's threshold from a sample of subtrees and
-                                   does not make the splits below it (the same tree,
-                                   built faster; docs/kdtree.md); 1 builds the whole
-                                   tree before pruning it */
+    double sah_budget_cut;   /* sah family with a leaf budget: the budget's threshold is
+                                estimated from a sample of subtrees, and the splits that
+                                save less than this share of the estimate are not made
+                                (docs/kdtree.md). Any value builds the same tree: a
+                                share too high only costs a second build, one too low
+                                saves less. 0: the default (0.5), negative: no
+                                estimate (the whole tree is built, then pruned) */
     int sah_split_to_limits; /* sah family: 1 splits every node until max_depth or
                                 max_leaf_prims ends it (the paper's termination criteria);
                                 0 (default): also a leaf when the best split does not pay */

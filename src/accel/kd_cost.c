@@ -100,6 +100,10 @@ void kd_cost_resolve(const bsp_build_options *o, kd_cost_model *m)
     m->leaf_budget = lb > 0.0 ? lb : 0.0;
     m->leaf_budget_min =
         o->sah_leaf_budget_min ? o->sah_leaf_budget_min : KD_DEFAULT_LEAF_BUDGET_MIN;
+    double bc = o->sah_budget_cut;
+    if (bc == 0.0 || isnan(bc))
+        bc = KD_DEFAULT_BUDGET_CUT;
+    m->budget_cut = bc > 0.0 ? fmin(bc, 1e6) : 0.0;
     m->mailbox = o->mailbox != 0;
     m->mailbox_hit = KD_MAILBOX_HIT_COST * m->c.traversal;
 }

@@ -36,6 +36,9 @@ typedef struct kd_cost_model {
     double leaf_budget; /* > 0: the most leaves per primitive
                            (bsp_build_options.sah_leaf_budget); 0: no budget */
     size_t leaf_budget_min; /* >= 1: the least budget, in leaves */
+    double budget_cut;  /* > 0: the share of the budget's estimated threshold below
+                           which splits are not made (bsp_build_options.sah_budget_cut);
+                           0: no estimate */
     int mailbox;        /* the tree is traversed with mailboxes: a primitive met
                            again in a later leaf costs mailbox_hit, not T_i */
     double mailbox_hit; /* the cost of that skipped test, in units of C_trav */
@@ -57,6 +60,10 @@ HIDDEN void kd_cost_defaults(bsp_sah_costs *c);
  * in a core's L2 cache, and the splits' savings are real there
  * (docs/kdtree.md). */
 #define KD_DEFAULT_LEAF_BUDGET_MIN 131072
+/* The default share of the budget's estimated threshold the build cuts at
+ * (bsp_build_options.sah_budget_cut): the estimates of 13 large scenes fell
+ * within 0.76-1.01 of the threshold (docs/kdtree.md). */
+#define KD_DEFAULT_BUDGET_CUT 0.5
 /* A test skipped by the mailbox (one stamp load and compare; often a cache
  * miss) in units of C_trav: about 2 ns against 13 ns per traversal step. */
 #define KD_MAILBOX_HIT_COST 0.15

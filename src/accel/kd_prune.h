@@ -33,11 +33,11 @@ typedef struct kd_budget_part {
 /* The estimate's sample: every KD_BUDGET_PROBE_EVERY-th subtree built by a
  * task of the SAH builder (kd_sah_tasks.c), in task order, and no estimate
  * from fewer than KD_BUDGET_MIN_PROBES; the other subtrees are built
- * without the splits that save less than KD_BUDGET_SAFETY times the
- * estimate (docs/kdtree.md: how far the estimates err). */
+ * without the splits that save less than a share of the
+ * estimate (kd_cost_model.budget_cut; docs/kdtree.md: how far the
+ * estimates err). */
 #define KD_BUDGET_PROBE_EVERY 8
 #define KD_BUDGET_MIN_PROBES 4
-#define KD_BUDGET_SAFETY 0.5
 #define KD_BUDGET_SPREAD 4.0
 
 /* Estimates the threshold kd_prune_to_leaves will find for MAX_LEAVES

@@ -118,6 +118,7 @@ typedef struct sah_tasks {
      * below it would be pruned anyway). 0: no estimate, every task in full. */
     size_t probe_every;
     size_t budget;       /* the leaf budget the estimate is for */
+    double cut_share;    /* the share of the estimate the other tasks cut at */
     double raised;       /* out: the least saving the other tasks were built with
                             (-inf: none; b->min_saving applied as ever) */
 } sah_tasks;

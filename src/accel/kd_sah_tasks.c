@@ -372,7 +372,7 @@ static int splice(kd_tree *t, const sah_task *tk)
 
 /* The leaf budget's estimate, once the top of the tree and the probes are
  * built (every probe succeeded or the build has failed): the raised least
- * saving for the tasks not yet taken, KD_BUDGET_SAFETY times the estimated
+ * saving for the tasks not yet taken, cut_share times the estimated
  * threshold, when that is above the build's (ts->raised; else -inf). 0 when
  * out of memory. */
 static int raise_least_saving(const sah_build *b, sah_tasks *ts)
@@ -406,7 +406,7 @@ static int raise_least_saving(const sah_build *b, sah_tasks *ts)
     free(parts);
     double lo = fmin(theta[0], fmin(theta[1], theta[2]));
     double hi = fmax(theta[0], fmax(theta[1], theta[2]));
-    double raised = KD_BUDGET_SAFETY * lo;
+    double raised = ts->cut_share * lo;
     if (!(hi <= KD_BUDGET_SPREAD * lo) || !(raised > b->min_saving))
         return 1; /* the samples disagree too much to trust, or nothing to raise */
     ts->raised = raised;

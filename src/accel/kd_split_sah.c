@@ -577,11 +577,11 @@ static void quantize_costs(double *c, size_t n)
 
 /* One build of the tree B->t over the N live primitives (of NP; cost sum
  * TSUM) from fresh root lists, with its tasks (on the threads O asks for);
- * with ESTIMATE, the leaf budget BUDGET's estimate raises the least saving
- * of the tasks built after it, *RAISED (else -inf). The savings are recorded
+ * with CUT_SHARE > 0, CUT_SHARE times the leaf budget BUDGET's estimate
+ * raises the least saving of the tasks built after it, *RAISED (else -inf). The savings are recorded
  * when b->record_savings; the tree is not pruned here. */
 static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n, size_t np,
-                             double tsum, size_t budget, int estimate, double *raised)
+                             double tsum, size_t budget, double cut_share, double *raised)
 {
     kd_tree *t = b->t;
     b->min_saving_sure = b->min_saving;
@@ -616,8 +616,9 @@ static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n,
     memset(&tasks, 0, sizeof tasks);
     tasks.max_n = n / 64 > 512 ? n / 64 : 512;
     tasks.min_n = tasks.max_n / 8;
-    tasks.probe_every = estimate ? KD_BUDGET_PROBE_EVERY : 0;
+    tasks.probe_every = cut_share > 0.0 ? KD_BUDGET_PROBE_EVERY : 0;
     tasks.budget = budget;
+    tasks.cut_share = cut_share;
     tasks.raised = -INFINITY;
     b->tasks = &tasks;
     kd_sah_start_workers(b, kd_build_threads(o), n);
@@ -756,10 +757,10 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     /* With a budget, first with its estimate; when the estimate proves too
      * high (the tree's threshold would lie at or below the raised least
      * saving, so splits it cut might have stayed), once more without. */
-    int estimate = b.record_savings && !o->sah_budget_no_estimate;
+    int estimate = b.record_savings && cm.budget_cut > 0.0;
     for (;;) {
         double raised = -INFINITY;
-        st = build_tree(&b, o, n, np, tsum, budget, estimate, &raised);
+        st = build_tree(&b, o, n, np, tsum, budget, estimate ? cm.budget_cut : 0.0, &raised);
         if (st != BSP_OK || !b.record_savings)
             break;
         int r = kd_prune_to_leaves(t, budget, raised);
