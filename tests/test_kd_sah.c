@@ -24,6 +24,7 @@
  */
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -768,6 +769,57 @@ TEST(sah_leaf_budget_estimate_builds_the_same_tree)
         bsp_accel_destroy(cut[1]);
         bsp_scene_destroy(s);
     }
+}
+
+/* What a build reported through bsp_build_options.progress. */
+typedef struct progress_log {
+    int calls, decreasing, out_of_range, other_thread;
+    double last;
+    pthread_t caller;
+} progress_log;
+
+static void log_progress(double done, void *ctx)
+{
+    progress_log *l = ctx;
+    l->out_of_range += !(done >= 0.0 && done <= 1.0);
+    l->decreasing += l->calls > 0 && done < l->last;
+    l->other_thread += !pthread_equal(pthread_self(), l->caller);
+    l->last = done;
+    l->calls++;
+}
+
+/* Builds KIND over S on THREADS threads and logs its progress into *L. */
+static void build_logged(const bsp_scene *s, bsp_accel_kind kind, int threads, progress_log *l)
+{
+    *l = (progress_log){0, 0, 0, 0, -1.0, pthread_self()};
+    bsp_build_options o = sah_options();
+    o.kind = kind;
+    o.threads = threads;
+    o.progress = log_progress;
+    o.progress_ctx = l;
+    bsp_accel_destroy(build(s, &o));
+}
+
+/* The build's progress: reported on the calling thread, within [0, 1],
+ * never back for a single tree, ending at 1; many times for an SAH build
+ * of many subtrees (on 1 and 3 threads), once for the naive method. */
+TEST(build_progress_is_reported_on_the_calling_thread)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load("spd:balls:5", &s, &err) == BSP_OK);
+    progress_log l;
+    for (int threads = 1; threads <= 3; threads += 2) {
+        build_logged(s, BSP_ACCEL_SAH, threads, &l);
+        /* the calling thread reports after each subtree it builds itself */
+        CHECK_MSG(l.calls >= (threads == 1 ? 20 : 5) && !l.decreasing && !l.out_of_range &&
+                      !l.other_thread && l.last == 1.0,
+                  "%d threads: %d calls (%d back, %d out of range, %d off-thread), last %g",
+                  threads, l.calls, l.decreasing, l.out_of_range, l.other_thread, l.last);
+    }
+    build_logged(s, BSP_ACCEL_NAIVE, 1, &l);
+    CHECK(l.calls == 1 && l.last == 1.0);
+    bsp_scene_destroy(s);
 }
 
 static void check_exact_opts(const bsp_scene *s, const char *name, bsp_build_options o, int nrays,

@@ -10,6 +10,7 @@
 #include <time.h>
 
 #include "cli.h"
+#include "util/progress.h"
 
 const char *prog = "bspray";
 
@@ -96,11 +97,44 @@ bsp_scene *load_scene(const char *path)
     return scene;
 }
 
+/* The build's progress bar, drawn only for a build that takes more than
+ * half a second (most take less), on a terminal. A second tree (sah-mixed's
+ * check) restarts the count, so the bar shows the most reported. */
+typedef struct build_bar {
+    progress_bar *bar; /* made at the first report after BUILD_BAR_DELAY */
+    double start, most;
+} build_bar;
+
+#define BUILD_BAR_DELAY 0.5
+
+static double wall_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void on_build_progress(double done, void *ctx)
+{
+    build_bar *b = ctx;
+    if (done > b->most)
+        b->most = done;
+    if (!b->bar && done < 1.0 && wall_seconds() - b->start > BUILD_BAR_DELAY)
+        b->bar = progress_create(stderr, "build");
+    progress_update(b->bar, b->most);
+}
+
 bsp_accel *build_accel(const bsp_scene *scene, const bsp_build_options *opts)
 {
     bsp_accel *accel = NULL;
     bsp_error err;
-    if (bsp_accel_build(scene, opts, &accel, &err) != BSP_OK) {
+    bsp_build_options o = *opts;
+    build_bar bar = {NULL, wall_seconds(), 0.0};
+    o.progress = on_build_progress;
+    o.progress_ctx = &bar;
+    bsp_status st = bsp_accel_build(scene, &o, &accel, &err);
+    progress_finish(bar.bar);
+    if (st != BSP_OK) {
         fprintf(stderr, "%s: %s\n", prog, err.message);
         exit(EXIT_INPUT);
     }

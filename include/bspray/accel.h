@@ -145,6 +145,14 @@ typedef struct bsp_build_options {
                               take; a build that needs more fails with BSP_ERR_LIMIT
                               (deep trees of overlapping primitives grow as 2^depth).
                               0 (default): half the machine's physical memory */
+    void (*progress)(double done, void *ctx); /* NULL (default), or called now and then on
+                              the thread that calls bsp_accel_build with the share of the
+                              tree built, in [0, 1], and with 1 when the build is done.
+                              The sah family reports as its subtrees (about a hundred)
+                              are built; a build that makes a second tree (sah-mixed's
+                              check, a leaf budget's estimate found too high) may report
+                              from 0 again */
+    void *progress_ctx;    /* passed to progress */
 } bsp_build_options;
 
 void bsp_build_options_defaults(bsp_build_options *opts);

@@ -93,6 +93,10 @@ bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts
         return st;
     }
     a->build_seconds = accel_now() - t0;
+    if (a->opts.progress)
+        a->opts.progress(1.0, a->opts.progress_ctx);
+    a->opts.progress = NULL; /* the caller's context need not outlive the build */
+    a->opts.progress_ctx = NULL;
     *out = a;
     return BSP_OK;
 }

@@ -121,6 +121,7 @@ typedef struct sah_tasks {
     double cut_share;    /* the share of the estimate the other tasks cut at */
     double raised;       /* out: the least saving the other tasks were built with
                             (-inf: none; b->min_saving applied as ever) */
+    double n_done, n_all; /* the primitives of the tasks built, and of all (progress) */
 } sah_tasks;
 
 typedef struct sah_build {
@@ -165,6 +166,8 @@ typedef struct sah_build {
     size_t list_cap;
     kd_clip_scratch clip;
     bsp_error *err;
+    void (*progress)(double done, void *ctx); /* bsp_build_options.progress, or NULL */
+    void *progress_ctx;
     void *mruns;        /* kd_sweep_measure's scratch (runs, positions), grown on demand */
     size_t mruns_cap;
 } sah_build;

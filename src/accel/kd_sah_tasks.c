@@ -233,8 +233,10 @@ static sah_task *take_task(sah_pool *pool, int only_probes)
 }
 
 /* Builds tasks from POOL (see take_task) with scratch of its own; 0 when
- * it could not make that scratch (and so built none). */
-static int run_tasks(sah_pool *pool, int only_probes)
+ * it could not make that scratch (and so built none). REPORT: the thread
+ * that called the build, which reports the progress (proto.progress) after
+ * each task it builds. */
+static int run_tasks(sah_pool *pool, int only_probes, int report)
 {
     sah_build w = pool->proto;
     w.cls = calloc((size_t)w.spare + 1, 1);
@@ -244,12 +246,17 @@ static int run_tasks(sah_pool *pool, int only_probes)
     sah_task *tk;
     while (ready && (tk = take_task(pool, only_probes)) != NULL) {
         run_task(&w, tk);
+        sah_tasks *ts = pool->tasks;
+        pthread_mutex_lock(&pool->lock);
+        ts->n_done += (double)tk->n;
+        double done = ts->n_all > 0.0 ? ts->n_done / ts->n_all : 0.0;
         if (tk->probe) {
-            pthread_mutex_lock(&pool->lock);
             pool->probes_done++;
             pthread_cond_broadcast(&pool->done);
-            pthread_mutex_unlock(&pool->lock);
         }
+        pthread_mutex_unlock(&pool->lock);
+        if (report && w.progress)
+            w.progress(done < 1.0 ? done : 1.0, w.progress_ctx);
     }
     kd_sah_scratch_free(&w);
     if (w.descent && w.dctx)
@@ -259,7 +266,7 @@ static int run_tasks(sah_pool *pool, int only_probes)
 
 static void *worker(void *arg)
 {
-    (void)run_tasks(arg, 0); /* if it cannot, the other threads take the tasks */
+    (void)run_tasks(arg, 0, 0); /* if it cannot, the other threads take the tasks */
     return NULL;
 }
 
@@ -425,6 +432,8 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
         st = task_oom(b->err);
     if (pool) {
         pthread_mutex_lock(&pool->lock);
+        for (size_t i = 0; i < ts->n; i++) /* every task is listed now */
+            ts->n_all += (double)ts->v[i]->n;
         pool->closed = 1;
         pool->abort = st != BSP_OK;
         pthread_cond_broadcast(&pool->more);
@@ -432,7 +441,7 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
         if (st == BSP_OK && !pool->estimated) {
             /* the probes, with the workers: when this thread finds none left
              * to take, every one is taken; then wait for those still built */
-            if (!run_tasks(pool, 1))
+            if (!run_tasks(pool, 1, 1))
                 st = task_oom(b->err);
             pthread_mutex_lock(&pool->lock);
             while (pool->probes_done < pool->probes_taken)
@@ -450,7 +459,7 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
             pthread_mutex_unlock(&pool->lock);
         }
         if (st == BSP_OK)
-            (void)run_tasks(pool, 0); /* if it cannot, a task left unbuilt fails the build */
+            (void)run_tasks(pool, 0, 1); /* if it cannot, a task left unbuilt fails the build */
         for (int i = 0; i < pool->started; i++)
             pthread_join(pool->tid[i], NULL);
         pool_destroy(pool);

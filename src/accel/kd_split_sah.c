@@ -665,6 +665,8 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     b.mailbox = cm.mailbox;
     b.mb_hit = cm.mailbox_hit;
     b.err = err;
+    b.progress = o->progress;
+    b.progress_ctx = o->progress_ctx;
 
     bsp_status st = BSP_OK;
     size_t n = 0;
