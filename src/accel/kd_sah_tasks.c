@@ -414,8 +414,9 @@ static int raise_least_saving(const sah_build *b, sah_tasks *ts)
     double lo = fmin(theta[0], fmin(theta[1], theta[2]));
     double hi = fmax(theta[0], fmax(theta[1], theta[2]));
     double raised = ts->cut_share * lo;
-    if (!(hi <= KD_BUDGET_SPREAD * lo) || !(raised > b->min_saving))
-        return 1; /* the samples disagree too much to trust, or nothing to raise */
+    if (!(hi <= KD_BUDGET_SPREAD * lo) || !(raised > b->min_saving) || !isfinite(raised))
+        return 1; /* the samples disagree too much to trust, nothing to raise, or the
+                     budget is met by no split at all (a cut at +inf cannot be proved) */
     ts->raised = raised;
     return 1;
 }
