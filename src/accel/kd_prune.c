@@ -35,6 +35,12 @@
  * its root held, less those its splits found outside every child cell, so
  * the conservative assignment invariant (kd_tree.h) still holds.
  *
+ * The estimate (kd_prune_estimate). The SAH builder need not make the
+ * splits the prune will remove: it estimates theta from the top of the tree
+ * and a sample of its subtrees, builds the rest without the splits saving
+ * less than a share of the estimate, and kd_prune_to_leaves then checks
+ * that this cut lay below theta (docs/kdtree.md, session 20).
+ *
  * Children always have larger indices than their parent (the builder and
  * the splice of parallel subtrees allocate pairs after their parent), so
  * one pass in index order visits parents first.

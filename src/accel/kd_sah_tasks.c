@@ -10,7 +10,11 @@
  * threads, started before the main build, take the tasks in order as they
  * are deferred, each with scratch of its own (the per-primitive bounds,
  * costs and classes are shared read-only); when the main build is done, its
- * thread joins them. The subtrees are then appended to the main array in
+ * thread joins them. With a leaf budget's estimate (sah_tasks.probe_every)
+ * the sampled tasks ("probes") go first; once the main build is done and
+ * the probes are built, the calling thread makes the estimate
+ * (raise_least_saving), and the tasks not yet taken are built with its
+ * raised least saving. The subtrees are then appended to the main array in
  * task order, their child and leaf indices rebased. Which nodes become tasks
  * depends only on the scene, so every thread count builds the very same node
  * array: within a task, and in the top part, nodes are in depth-first order;
