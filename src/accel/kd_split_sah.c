@@ -90,7 +90,7 @@
  */
 #include "accel/kd_prune.h"
 #include "accel/kd_sah.h"
-#include "util/insertion_sort.h"
+#include "util/sort.h"
 
 #define MAX_BAD_REFINES 1
 #define MIN_BAD_REFINE_PRIMS 8
@@ -129,20 +129,8 @@ static void radix_sort(uint64_t *a, uint64_t *tmp, size_t n)
         memcpy(a, src, n * sizeof *a);
 }
 
-static int cmp_u64(const void *x, const void *y)
-{
-    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
-    return (a > b) - (a < b);
-}
-
-static void sort_keys(uint64_t *a, size_t n)
-{
-    if (n > 48) {
-        qsort(a, n, sizeof *a, cmp_u64);
-        return;
-    }
-    INSERTION_SORT(uint64_t, a, n);
-}
+/* short runs of new events: insertion sort up to 48 keys (measured) */
+DEFINE_SORT(sort_keys, uint64_t, 48)
 
 static bsp_status oom(sah_build *b)
 {

@@ -12,7 +12,7 @@
 #include "accel/kd_tree.h"
 #include "accel/kd_view.h"
 #include "geom/vec.h"
-#include "util/insertion_sort.h"
+#include "util/sort.h"
 
 int kd_tree_init(kd_tree *t, const bsp_scene *scene, int max_depth, int max_leaf_prims)
 {
@@ -133,19 +133,11 @@ int kd_reserve_prims(kd_tree *t, size_t more)
     return 1;
 }
 
-static int cmp_u32(const void *x, const void *y)
-{
-    uint32_t a = *(const uint32_t *)x, b = *(const uint32_t *)y;
-    return (a > b) - (a < b);
-}
+DEFINE_SORT(sort_u32, uint32_t, 32)
 
 void kd_sort_prims(uint32_t *a, size_t n)
 {
-    if (n > 32) {
-        qsort(a, n, sizeof *a, cmp_u32);
-        return;
-    }
-    INSERTION_SORT(uint32_t, a, n);
+    sort_u32(a, n);
 }
 
 size_t kd_sort_unique_prims(uint32_t *a, size_t n)
