@@ -310,13 +310,15 @@ double kd_prune_estimate(const kd_tree *top, const kd_budget_part *parts, size_t
             w[i - 1] += w[i];
     }
     e.built_n = built_n;
-    qsort(e.top, e.ntop, sizeof *e.top, cmp_double);
-    qsort(e.exact, e.nexact, sizeof *e.exact, cmp_double);
-    qsort(e.pooled, e.npooled, sizeof *e.pooled, cmp_double);
+    /* every value counts at -inf, sorted or not: a tree estimated within its
+     * budget needs no sorting */
     if (leaves_at(&e, -INFINITY) <= (double)max_leaves) {
         theta = -INFINITY;
         goto out;
     }
+    qsort(e.top, e.ntop, sizeof *e.top, cmp_double);
+    qsort(e.exact, e.nexact, sizeof *e.exact, cmp_double);
+    qsort(e.pooled, e.npooled, sizeof *e.pooled, cmp_double);
     /* the least candidate theta at which the estimate meets the budget: the
      * count changes only at the values (the chains are values of the top) */
     {
