@@ -119,7 +119,8 @@ static void print_help(void)
            "                  rays (primary or all), ScnCov, nrays, N_V, N_IT, N_TS, T_B, T_TR,\n"
            "                  threads, tree (the rule, or sah where sah-mixed kept sah's tree)\n"
            "  --quiet         no progress lines\n"
-           "  --costs LIST, --empty-bonus F, --min-saving X, --leaf-budget X  the SAH model (see\n"
+           "  --costs LIST, --empty-bonus F, --min-saving X, --leaf-budget X, --leaf-budget-min N,\n"
+           "                 --budget-cut F|off  the SAH model (see\n"
            "                 'bspray render --help')\n",
            paper_usage);
 }
