@@ -107,19 +107,12 @@ typedef struct build_bar {
 
 #define BUILD_BAR_DELAY 0.5
 
-static double wall_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static void on_build_progress(double done, void *ctx)
 {
     build_bar *b = ctx;
     if (done > b->most)
         b->most = done;
-    if (!b->bar && done < 1.0 && wall_seconds() - b->start > BUILD_BAR_DELAY)
+    if (!b->bar && done < 1.0 && now_seconds() - b->start > BUILD_BAR_DELAY)
         b->bar = progress_create(stderr, "build");
     progress_update(b->bar, b->most);
 }
@@ -129,7 +122,7 @@ bsp_accel *build_accel(const bsp_scene *scene, const bsp_build_options *opts)
     bsp_accel *accel = NULL;
     bsp_error err;
     bsp_build_options o = *opts;
-    build_bar bar = {NULL, wall_seconds(), 0.0};
+    build_bar bar = {NULL, now_seconds(), 0.0};
     o.progress = on_build_progress;
     o.progress_ctx = &bar;
     bsp_status st = bsp_accel_build(scene, &o, &accel, &err);

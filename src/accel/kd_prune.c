@@ -320,29 +320,23 @@ double kd_prune_estimate(const kd_tree *top, const kd_budget_part *parts, size_t
     qsort(e.exact, e.nexact, sizeof *e.exact, cmp_double);
     qsort(e.pooled, e.npooled, sizeof *e.pooled, cmp_double);
     /* the least candidate theta at which the estimate meets the budget: the
-     * count changes only at the values (the chains are values of the top) */
-    {
-        double *cand = m; /* no longer needed: reuse for the merged candidates */
-        size_t nc = e.ntop + e.nexact + e.npooled;
-        if (nc > nodes) {
-            double *nb = realloc(m, nc * sizeof *nb);
-            if (!nb) {
-                theta = 0.0;
-                goto out;
-            }
-            m = cand = nb;
-        }
-        memcpy(cand, buf, nc * sizeof *cand);
-        qsort(cand, nc, sizeof *cand, cmp_double);
-        size_t lo = 0, hi = nc; /* leaves_at(cand[hi]) <= budget, or hi = nc */
+     * count changes only at the values (the chains are values of the top),
+     * and it falls as theta grows, so a search of each sorted set finds its
+     * least such value, and the least of the three is the answer */
+    theta = INFINITY;
+    const double *set[3] = {e.top, e.exact, e.pooled};
+    const size_t nset[3] = {e.ntop, e.nexact, e.npooled};
+    for (int k = 0; k < 3; k++) {
+        size_t lo = 0, hi = nset[k]; /* the estimate meets the budget at set[k][hi..) */
         while (lo < hi) {
             size_t mid = lo + (hi - lo) / 2;
-            if (leaves_at(&e, cand[mid]) <= (double)max_leaves)
+            if (leaves_at(&e, set[k][mid]) <= (double)max_leaves)
                 hi = mid;
             else
                 lo = mid + 1;
         }
-        theta = lo < nc ? cand[lo] : INFINITY;
+        if (lo < nset[k] && set[k][lo] < theta)
+            theta = set[k][lo];
     }
 out:
     free(m);

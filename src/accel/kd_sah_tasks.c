@@ -199,7 +199,6 @@ static void run_task(sah_build *w, sah_task *tk)
     w->t = (kd_tree *)main_t;
 }
 
-
 /* The next task for a thread to build, under the pool's lock: a probe while
  * there is one, else (unless ONLY_PROBES) any other, in task order; waits
  * while none is listed yet. A task taken before the estimate is made is
@@ -400,6 +399,10 @@ static int raise_least_saving(const sah_build *b, sah_tasks *ts)
     kd_budget_part *parts = malloc((ts->n ? ts->n : 1) * sizeof *parts);
     if (!parts)
         return 0;
+    for (size_t i = 0; i < ts->n; i++) {
+        parts[i].node = ts->v[i]->node;
+        parts[i].n = ts->v[i]->n;
+    }
     /* from all probes, and from each half of them (alternate probes) */
     double theta[3];
     for (int h = 0; h < 3; h++) {
@@ -408,8 +411,6 @@ static int raise_least_saving(const sah_build *b, sah_tasks *ts)
             const sah_task *tk = ts->v[i];
             int use = tk->probe && (h == 0 || (int)(probe_i % 2) == h - 1);
             probe_i += (size_t)tk->probe;
-            parts[i].node = tk->node;
-            parts[i].n = tk->n;
             parts[i].sub = use ? &tk->sub : NULL;
         }
         theta[h] = kd_prune_estimate(b->t, parts, ts->n, ts->budget);
@@ -485,8 +486,8 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
         free(ts->v[i]);
     }
     free(ts->v);
-    const double raised = ts->raised;
-    memset(ts, 0, sizeof *ts);
-    ts->raised = raised; /* the caller's to read */
+    ts->v = NULL; /* ts->raised stays for the caller */
+    ts->n = ts->cap = 0;
+    ts->pool = NULL;
     return st;
 }

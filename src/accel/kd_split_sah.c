@@ -95,8 +95,8 @@
 #include "util/sort.h"
 
 #define MAX_BAD_REFINES 1
-#define ROOT_LISTS_PARALLEL_MIN (1u << 17) /* events per axis: a thread for fewer costs more */
 #define MIN_BAD_REFINE_PRIMS 8
+#define ROOT_LISTS_PARALLEL_MIN (1u << 17) /* events per axis: a thread for fewer costs more */
 
 /* --- sorting -------------------------------------------------------------------------- */
 
@@ -619,8 +619,9 @@ static void root_lists(sah_build *b, size_t m, int threads)
 /* One build of the tree B->t over the N live primitives (of NP; cost sum
  * TSUM) from fresh root lists, with its tasks (on the threads O asks for);
  * with CUT_SHARE > 0, CUT_SHARE times the leaf budget BUDGET's estimate
- * raises the least saving of the tasks built after it, *RAISED (else -inf). The savings are recorded
- * when b->record_savings; the tree is not pruned here. */
+ * raises the least saving of the tasks built after it, *RAISED (else
+ * -inf). The savings are recorded when b->record_savings; the tree is not
+ * pruned here. */
 static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n, size_t np,
                              double tsum, size_t budget, double cut_share, double *raised)
 {
@@ -635,7 +636,8 @@ static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n,
     }
     /* the root's events, made in primitive order, then sorted once */
     const size_t m = 2 * n;
-    root_lists(b, m, kd_build_threads(o));
+    const int threads = kd_build_threads(o);
+    root_lists(b, m, threads);
     node_lists root = {0, m, n, tsum};
     /* subtrees of n/64 (at least 512) primitives and down to an eighth of that
      * are built as tasks, on the threads asked for */
@@ -648,7 +650,7 @@ static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n,
     tasks.cut_share = cut_share;
     tasks.raised = -INFINITY;
     b->tasks = &tasks;
-    kd_sah_start_workers(b, kd_build_threads(o), n);
+    kd_sah_start_workers(b, threads, n);
     double cost;
     bsp_status st = kd_sah_build_node(b, 0, t->box, root, 3 * m, 0, 0, b->surface, &cost);
     st = kd_sah_finish_tasks(b, st);
@@ -656,7 +658,6 @@ static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n,
     kd_sah_scratch_free(b);
     return st;
 }
-
 
 void kd_sah_default_limits(bsp_build_options *o, const bsp_scene *scene)
 {
