@@ -50,6 +50,7 @@
 #include <string.h>
 
 #include "accel/kd_prune.h"
+#include "util/bigmem.h"
 #include "util/sorted_count.h"
 
 /* The value of rank K (0-based) in A[0..N) sorted in decreasing order
@@ -181,8 +182,8 @@ int kd_prune_to_leaves(kd_tree *t, size_t max_leaves, double cut)
         return 1;
     if (leaves <= max_leaves)
         return cut > -INFINITY ? -1 : 1;
-    double *m = malloc((size_t)t->nnodes * sizeof *m);
-    double *scratch = malloc((size_t)t->nnodes * sizeof *scratch);
+    double *m = bigmem_malloc((size_t)t->nnodes * sizeof *m);
+    double *scratch = bigmem_malloc((size_t)t->nnodes * sizeof *scratch);
     if (!m || !scratch) {
         free(m);
         free(scratch);
@@ -205,8 +206,8 @@ int kd_prune_to_leaves(kd_tree *t, size_t max_leaves, double cut)
     free(m);
     free(scratch);
     prune_out o = {t, theta, NULL, 1, NULL, 0};
-    o.nodes = malloc((kept ? kept : 1) * sizeof *o.nodes);
-    o.prims = malloc((t->nprims ? t->nprims : 1) * sizeof *o.prims);
+    o.nodes = bigmem_malloc((kept ? kept : 1) * sizeof *o.nodes);
+    o.prims = bigmem_malloc((t->nprims ? t->nprims : 1) * sizeof *o.prims);
     if (!o.nodes || !o.prims) {
         free(o.nodes);
         free(o.prims);
@@ -271,8 +272,8 @@ double kd_prune_estimate(const kd_tree *top, const kd_budget_part *parts, size_t
         return -INFINITY;
     estimate_sets e;
     memset(&e, 0, sizeof e);
-    double *m = malloc(nodes * sizeof *m), *mtop = malloc(top->nnodes * sizeof *mtop);
-    double *buf = malloc(values * sizeof *buf);
+    double *m = bigmem_malloc(nodes * sizeof *m), *mtop = bigmem_malloc(top->nnodes * sizeof *mtop);
+    double *buf = bigmem_malloc(values * sizeof *buf);
     double *chain = malloc((nunbuilt + 1) * 2 * sizeof *chain);
     double theta = 0.0;
     if (!m || !mtop || !buf || !chain)

@@ -15,6 +15,7 @@
 #include "accel/kd_clip.h"
 #include "accel/kd_cost.h"
 #include "accel/kd_tree.h"
+#include "util/bigmem.h"
 
 
 #define EV_START ((uint64_t)1 << 31)
@@ -103,6 +104,7 @@ enum { COST_UNIFORM, COST_CLASS, COST_ARRAY };
  * (kd_sah_tasks.c): worker threads build them while the main build goes on. */
 typedef struct sah_task sah_task;
 typedef struct sah_pool sah_pool;
+typedef struct sah_ev_chunk sah_ev_chunk;
 typedef struct sah_tasks {
     sah_task **v;        /* in the order deferred; each task apart, so that growing
                             v moves no task a worker is building */
@@ -122,6 +124,7 @@ typedef struct sah_tasks {
     double raised;       /* out: the least saving the other tasks were built with
                             (-inf: none; b->min_saving applied as ever) */
     double n_done, n_all; /* the primitives of the tasks built, and of all (progress) */
+    sah_ev_chunk *chunks; /* where the tasks' lists wait (main build thread only) */
 } sah_tasks;
 
 typedef struct sah_build {
@@ -177,7 +180,7 @@ static inline int grow_u64(uint64_t **p, size_t *cap, size_t need)
     if (need <= *cap)
         return 1;
     size_t ncap = *cap * 2 > need ? *cap * 2 : need;
-    uint64_t *np = realloc(*p, ncap * sizeof *np);
+    uint64_t *np = bigmem_realloc(*p, *cap * sizeof *np, ncap * sizeof *np);
     if (!np)
         return 0;
     *p = np;

@@ -629,7 +629,7 @@ static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n,
     b->min_saving_sure = b->min_saving;
     b->cls = calloc(np + 1, 1); /* + 1: the spare slot */
     b->cap = 12 * n + 1024;     /* the root's lists and two radix buffers (root_lists), then room */
-    b->ev = malloc(b->cap * sizeof *b->ev);
+    b->ev = bigmem_malloc(b->cap * sizeof *b->ev);
     if (!b->cls || !b->ev || (b->record_savings && !kd_tree_record_savings(t))) {
         kd_sah_scratch_free(b);
         return oom(b);
@@ -705,7 +705,7 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     if (descent && !(b.actx = b.dctx = descent->thread_ctx(ctx)))
         return oom(&b);
 
-    b.bounds = malloc(np * sizeof *b.bounds);
+    b.bounds = bigmem_malloc(np * sizeof *b.bounds);
     b.spare = (uint32_t)np;
     if (!b.bounds) {
         st = oom(&b);
@@ -726,7 +726,7 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     b.unif = first;
     b.cost_mode = uniform ? COST_UNIFORM : COST_ARRAY;
     if (!uniform) {
-        b.cost = malloc(np * sizeof *b.cost);
+        b.cost = bigmem_malloc(np * sizeof *b.cost);
         if (!b.cost) {
             st = oom(&b);
             goto done;

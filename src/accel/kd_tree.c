@@ -7,6 +7,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "util/bigmem.h"
+
 #include "accel/kd_clip.h"
 #include "accel/kd_cost.h"
 #include "accel/kd_tree.h"
@@ -86,12 +88,12 @@ int kd_reserve_nodes(kd_tree *t, size_t nodes)
         ncap *= 2;
     if (ncap > KD_MAX_NODES)
         ncap = KD_MAX_NODES;
-    kd_node *nn = realloc(t->nodes, ncap * sizeof *nn);
+    kd_node *nn = bigmem_realloc(t->nodes, t->cap_nodes * sizeof *nn, ncap * sizeof *nn);
     if (!nn)
         return 0;
     t->nodes = nn;
     if (t->saving) {
-        double *ns = realloc(t->saving, ncap * sizeof *ns);
+        double *ns = bigmem_realloc(t->saving, t->cap_nodes * sizeof *ns, ncap * sizeof *ns);
         if (!ns)
             return 0; /* cap_nodes unchanged: the savings stay the smaller array */
         t->saving = ns;
@@ -124,7 +126,7 @@ int kd_reserve_prims(kd_tree *t, size_t more)
         size_t ncap = t->cap_prims ? t->cap_prims : 1024;
         while (ncap < t->nprims + more)
             ncap *= 2;
-        uint32_t *np = realloc(t->prims, ncap * sizeof *np);
+        uint32_t *np = bigmem_realloc(t->prims, t->cap_prims * sizeof *np, ncap * sizeof *np);
         if (!np)
             return 0;
         t->prims = np;
