@@ -104,7 +104,6 @@ enum { COST_UNIFORM, COST_CLASS, COST_ARRAY };
  * (kd_sah_tasks.c): worker threads build them while the main build goes on. */
 typedef struct sah_task sah_task;
 typedef struct sah_pool sah_pool;
-typedef struct sah_ev_chunk sah_ev_chunk;
 typedef struct sah_tasks {
     sah_task **v;        /* in the order deferred; each task apart, so that growing
                             v moves no task a worker is building */
@@ -124,7 +123,6 @@ typedef struct sah_tasks {
     double raised;       /* out: the least saving the other tasks were built with
                             (-inf: none; b->min_saving applied as ever) */
     double n_done, n_all; /* the primitives of the tasks built, and of all (progress) */
-    sah_ev_chunk *chunks; /* where the tasks' lists wait (main build thread only) */
 } sah_tasks;
 
 typedef struct sah_build {

@@ -39,7 +39,7 @@ struct sah_task {
     size_t n, cap; /* primitives; room of ev */
     double tsum;
     int depth, surface;
-    uint64_t *ev;  /* its three lists (axis k at k * 2n), in sah_tasks.chunks */
+    uint64_t *ev;  /* its three lists (axis k at k * 2n), then room to grow */
     kd_tree sub;   /* its subtree, root at 0 */
     int probe;     /* built first, for the leaf budget's estimate (sah_tasks.probe_every) */
     double min_saving_sure; /* > the build's: its raised least saving (sah_build) */
@@ -118,38 +118,6 @@ static int list_task(sah_tasks *ts, sah_task *tk)
     return ok;
 }
 
-/* The deferred tasks' lists are copied into large chunks, kept until the
- * tasks are spliced: an array of its own for each task was fresh memory on
- * 4 KiB pages, a page fault per page (balls:6: a quarter of the build's
- * faults), where a chunk lies on huge pages (util/bigmem.h). Only the main
- * build thread adds to them; workers only read their task's lists. */
-struct sah_ev_chunk {
-    sah_ev_chunk *next;
-    size_t used, cap;
-    uint64_t ev[];
-};
-
-#define EV_CHUNK_EVENTS ((size_t)1 << 20) /* 8 MiB */
-
-/* Room for N events of a task's lists; NULL when out of memory. */
-static uint64_t *task_events(sah_tasks *ts, size_t n)
-{
-    sah_ev_chunk *c = ts->chunks;
-    if (!c || c->cap - c->used < n) {
-        size_t cap = n > EV_CHUNK_EVENTS ? n : EV_CHUNK_EVENTS;
-        c = bigmem_malloc(sizeof *c + cap * sizeof c->ev[0]);
-        if (!c)
-            return NULL;
-        c->next = ts->chunks;
-        c->used = 0;
-        c->cap = cap;
-        ts->chunks = c;
-    }
-    uint64_t *p = c->ev + c->used;
-    c->used += n;
-    return p;
-}
-
 bsp_status kd_sah_defer(sah_build *b, uint32_t node, const bsp_box *cell, const node_lists *L,
                         int depth, int surface)
 {
@@ -158,8 +126,8 @@ bsp_status kd_sah_defer(sah_build *b, uint32_t node, const bsp_box *cell, const 
     if (!tk)
         return task_oom(b->err);
     const size_t m = 2 * L->n;
-    tk->cap = 3 * m; /* just its lists: the worker builds on a stack of its own */
-    tk->ev = task_events(ts, tk->cap);
+    tk->cap = 3 * m; /* just its lists: the worker grows them (deferred tasks wait in memory) */
+    tk->ev = malloc(tk->cap * sizeof *tk->ev);
     if (!tk->ev) {
         free(tk);
         return task_oom(b->err);
@@ -178,6 +146,7 @@ bsp_status kd_sah_defer(sah_build *b, uint32_t node, const bsp_box *cell, const 
     b->t->nodes[node].u.first = 0;
     b->t->nodes[node].bits = KD_LEAF_TAG;
     if (!list_task(ts, tk)) {
+        free(tk->ev);
         free(tk);
         return task_oom(b->err);
     }
@@ -195,10 +164,7 @@ static void run_task(sah_build *w, sah_task *tk)
     sub->max_bytes = main_t->max_bytes; /* the whole tree is checked when spliced */
     sub->pad = main_t->pad;
     sub->box = tk->cell;
-    /* about what the task will need (balls: 1.6 nodes per sphere, teapot and
-     * tetra built in full 4-6 per triangle): grown from 1024, the array was
-     * copied up to seven times into fresh memory */
-    sub->cap_nodes = (uint32_t)(1024 + 4 * tk->n);
+    sub->cap_nodes = 1024;
     sub->nodes = malloc(sub->cap_nodes * sizeof *sub->nodes);
     if (!sub->nodes) {
         tk->st = error_set(&tk->err, BSP_ERR_NOMEM, NULL, 0,
@@ -213,17 +179,11 @@ static void run_task(sah_build *w, sah_task *tk)
     sub->nnodes = 1;
     sub->nodes[0].u.first = 0;
     sub->nodes[0].bits = KD_LEAF_TAG;
-    /* The thread's own event stack, kept from task to task: a stack made
-     * for each task was fresh memory every time, page faults on every page
-     * it grew into (balls:6: a fifth of the build's page faults). */
-    if (!grow_u64(&w->ev, &w->cap, tk->cap)) {
-        tk->st = error_set(&tk->err, BSP_ERR_NOMEM, NULL, 0,
-                           "out of memory while building the kd-tree");
-        return;
-    }
-    memcpy(w->ev, tk->ev, 6 * tk->n * sizeof *w->ev);
     w->t = sub;
     w->err = &tk->err;
+    w->ev = tk->ev; /* the task's event stack, for as long as it runs */
+    w->cap = tk->cap;
+    tk->ev = NULL;
     node_lists L = {0, 2 * tk->n, tk->n, tk->tsum};
     if (w->descent)
         w->descent->reset(w->dctx);
@@ -233,6 +193,9 @@ static void run_task(sah_build *w, sah_task *tk)
         w->min_saving_sure = tk->min_saving_sure;
     tk->st = kd_sah_build_node(w, 0, tk->cell, L, 6 * tk->n, tk->depth, 0, tk->surface, &cost);
     w->min_saving_sure = sure;
+    free(w->ev);
+    w->ev = NULL;
+    w->cap = 0;
     w->t = (kd_tree *)main_t;
 }
 
@@ -507,8 +470,9 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
             pthread_join(pool->tid[i], NULL);
         pool_destroy(pool);
     }
-    /* room for every subtree at once: grown splice by splice, the arrays were
-     * copied a dozen times into fresh memory (if it fails, splice says so) */
+    /* room for every subtree at once (on huge pages, util/bigmem.h): grown
+     * splice by splice, the arrays were copied a dozen times into fresh
+     * memory; if this fails, splice says so */
     size_t add_nodes = 0, add_prims = 0;
     for (size_t i = 0; i < ts->n; i++) {
         add_nodes += ts->v[i]->st == BSP_OK ? ts->v[i]->sub.nnodes - 1 : 0;
@@ -528,15 +492,11 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
         }
     }
     for (size_t i = 0; i < ts->n; i++) {
+        free(ts->v[i]->ev);
         kd_tree_free(&ts->v[i]->sub);
         free(ts->v[i]);
     }
     free(ts->v);
-    while (ts->chunks) {
-        sah_ev_chunk *next = ts->chunks->next;
-        free(ts->chunks);
-        ts->chunks = next;
-    }
     ts->v = NULL; /* ts->raised stays for the caller */
     ts->n = ts->cap = 0;
     ts->pool = NULL;

@@ -86,7 +86,9 @@
  * written above the node's free top, then the left child's are made in place
  * (stable compaction forward, merge backward), so a chain of cuts reuses one
  * region and a one-sided split copies nothing. No allocation per node: every
- * scratch array is grown amortized.
+ * scratch array is grown amortized, and the large ones lie on huge pages
+ * (util/bigmem.h): on 4 KiB pages, page faults and TLB misses were a fifth
+ * to a third of a large scene's first build.
  */
 #include <pthread.h>
 
