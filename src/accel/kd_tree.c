@@ -7,13 +7,12 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "util/bigmem.h"
-
 #include "accel/kd_clip.h"
 #include "accel/kd_cost.h"
 #include "accel/kd_tree.h"
 #include "accel/kd_view.h"
 #include "geom/vec.h"
+#include "util/bigmem.h"
 #include "util/sort.h"
 
 int kd_tree_init(kd_tree *t, const bsp_scene *scene, int max_depth, int max_leaf_prims)
