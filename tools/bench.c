@@ -99,7 +99,8 @@ static void print_help(void)
            "                 --budget-cut F|off  the SAH model (see\n"
            "                 'bspray render --help')\n"
            "\n"
-           "Columns: T_B build seconds on 1 and N threads (the same tree); MB structure size;\n"
+           "Columns: T_B build seconds on 1 and N threads (the same tree); MB structure size (a\n"
+           "kd-tree's nodes, leaf lists and leaf-ordered copy of the primitives);\n"
            "N_V leaves; N_IT intersection tests and N_TS traversal steps per ray (all rays of\n"
            "the render); T_TR render seconds on 1 and N threads (the best of --repeat renders);\n"
            "Mrays/s of pure ray shooting per class on 1 and N threads (the best of 3 passes\n"
@@ -400,7 +401,7 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
         bsp_accel_destroy(again);
     }
     bsp_accel_tree_stats(accel, &row.tree);
-    row.mbytes = (double)row.tree.bytes / (1024.0 * 1024.0);
+    row.mbytes = (double)(row.tree.bytes + row.tree.trace_bytes) / (1024.0 * 1024.0);
 
     if (kind != BSP_ACCEL_NAIVE) {
         char what[256];

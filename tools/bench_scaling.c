@@ -97,7 +97,8 @@ static void print_help(void)
            "                  [speedup]; kaplan builds on one thread whatever N\n"
            "  N_IN, N_V, N_OIV  interior nodes, leaves, primitive references in leaves\n"
            "  cost [cost]     the finished tree's expected SAH cost\n"
-           "  MB [bytes]      the tree's memory: nodes and leaf index lists\n"
+           "  MB [bytes]      the tree's memory: nodes, leaf index lists and the\n"
+           "                  traversal's leaf-ordered copy of the primitives\n"
            "  [builds]        builds timed per thread count\n"
            "The summary: per generator and method, us/prim of the largest scene over that\n"
            "of the smallest, next to ln N of the largest over ln N of the smallest.\n",
@@ -179,7 +180,8 @@ static void print_row(const scaling_row *r)
            " | %" PRIu64 " | %.2f | %.2f |\n",
            r->scene, bsp_accel_kind_name(r->kind), r->n, r->t1_cpu, us_per_prim(r),
            mprim_per_s(r), r->tn_wall, speedup(r), r->tree.interior_nodes, r->tree.leaves,
-           r->tree.references, r->tree.expected_cost, (double)r->tree.bytes / (1024.0 * 1024.0));
+           r->tree.references, r->tree.expected_cost,
+           (double)(r->tree.bytes + r->tree.trace_bytes) / (1024.0 * 1024.0));
     fflush(stdout);
 }
 
@@ -196,7 +198,8 @@ static void csv_row(FILE *f, const scaling_row *r, int threads)
             ",%.4f,%d\n",
             r->scene, bsp_accel_kind_name(r->kind), r->n, r->t1_cpu, us_per_prim(r),
             mprim_per_s(r), r->tn_wall, threads, r->tree.interior_nodes, r->tree.leaves,
-            r->tree.references, r->tree.expected_cost, r->tree.bytes, speedup(r), r->builds);
+            r->tree.references, r->tree.expected_cost, r->tree.bytes + r->tree.trace_bytes,
+            speedup(r), r->builds);
     fflush(f);
 }
 

@@ -124,6 +124,7 @@ static void print_stats_table(FILE *f, const char *scene_name, const char *accel
                    " |\n",
                 tree->interior_nodes, tree->leaves, tree->empty_leaves, tree->references);
         fprintf(f, "| tree bytes | %" PRIu64 " |\n", tree->bytes);
+        fprintf(f, "| trace copy bytes | %" PRIu64 " |\n", tree->trace_bytes);
     }
     fprintf(f, "| T_B[s] | %.3f |\n", st->build_seconds);
     fprintf(f, "| T_TR[s] | %.3f |\n", st->render_seconds);
@@ -185,9 +186,10 @@ static int write_stats_json(const char *path, const char *scene_name, const char
     fprintf(f, "  \"mailbox_hits\": %" PRIu64 ",\n", mb);
     fprintf(f,
             "  \"N_IN\": %" PRIu64 ",\n  \"N_V\": %" PRIu64 ",\n  \"N_EV\": %" PRIu64
-            ",\n  \"N_OIV\": %" PRIu64 ",\n  \"tree_bytes\": %" PRIu64 ",\n",
+            ",\n  \"N_OIV\": %" PRIu64 ",\n  \"tree_bytes\": %" PRIu64
+            ",\n  \"trace_bytes\": %" PRIu64 ",\n",
             tree->interior_nodes, tree->leaves, tree->empty_leaves, tree->references,
-            tree->bytes);
+            tree->bytes, tree->trace_bytes);
     fprintf(f, "  \"T_B\": %.6f,\n  \"T_TR\": %.6f,\n", st->build_seconds, st->render_seconds);
     if (chk->ran)
         fprintf(f,
@@ -586,7 +588,11 @@ static int cmd_stats(int argc, char **argv)
         printf("  N_EV           %" PRIu64 "\n", t.empty_leaves);
         printf("  N_OIV          %" PRIu64 "\n", t.references);
         printf("  leaf depth     max %d, mean %.2f\n", t.max_leaf_depth, t.avg_leaf_depth);
-        printf("  bytes          %" PRIu64 "\n", t.bytes);
+        printf("  bytes          %" PRIu64 " (nodes and leaf lists)\n", t.bytes);
+        if (t.trace_bytes)
+            printf("  trace bytes    %" PRIu64 " (the traversal's copy of the primitives in leaf\n"
+                   "                 order, and the leaf lists in its numbering)\n",
+                   t.trace_bytes);
         printf("  expected cost  %.3f (SAH, traversal and intersection cost 1)\n",
                t.expected_cost);
         printf("  model cost     %.3f (SAH under the build's costs, in traversal steps; no\n"

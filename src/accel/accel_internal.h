@@ -26,8 +26,10 @@ struct bsp_accel {
 struct bsp_query {
     const bsp_accel *accel; /* borrowed */
     bsp_query_counters counters;
-    /* Mailbox: stamp[prim] == ray_id means prim was already tested with the
-     * current ray. Lives here, never in the shared structure. */
+    /* Mailbox: stamp[i] == ray_id means primitive i was already tested with
+     * the current ray, i in the structure's numbering (a kd-tree's local
+     * numbers, kd_local.h; fewer than the scene's primitives). Lives here,
+     * never in the shared structure. */
     uint32_t *stamp;
     uint32_t ray_id;
 };

@@ -42,6 +42,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "accel/kd_local.h"
 #include "accel/kd_tree.h"
 #include "geom/vec.h"
 
@@ -299,7 +300,8 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
     uint64_t interior = 0, leaves = 0, nonempty = 0, refs = 0, tests = 0;
     const char *base = (const char *)t->nodes;
     size_t off = 0; /* the root */
-    const uint32_t *prims = t->prims;
+    const uint32_t *prims = t->lref; /* local numbers (kd_local.h) */
+    const kd_local *loc = t->loc;
     exit_point *ex = stack;
     for (;;) {
         off = descend(base, off, &tr, en, &ex, &interior);
@@ -311,17 +313,20 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
             nonempty++;
             refs += cnt;
             do {
-                uint32_t p = *list++;
+                uint32_t l = *list++;
                 if (mbox) {
-                    if (mbox[p] == stamp)
+                    if (mbox[l] == stamp)
                         continue;
-                    mbox[p] = stamp;
+                    mbox[l] = stamp;
                 }
                 tests++;
-                if (scene_isect(s, p, &r, tmax, &h) && (h.t < best.t || p < best_p)) {
-                    best = h;
-                    best_p = p;
-                    tmax = h.t;
+                if (kd_local_isect(s, &loc[l], &r, tmax, &h)) {
+                    uint32_t p = loc[l].prim;
+                    if (h.t < best.t || p < best_p) {
+                        best = h;
+                        best_p = p;
+                        tmax = h.t;
+                    }
                 }
             } while (list != end);
         }
@@ -358,7 +363,8 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
     uint64_t interior = 0, leaves = 0, nonempty = 0, refs = 0, tests = 0;
     const char *base = (const char *)t->nodes;
     size_t off = 0; /* the root */
-    const uint32_t *prims = t->prims;
+    const uint32_t *prims = t->lref; /* local numbers (kd_local.h) */
+    const kd_local *loc = t->loc;
     exit_point *ex = stack;
     for (;;) {
         off = descend(base, off, &tr, en, &ex, &interior);
@@ -369,15 +375,15 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
             const uint32_t *list = prims + n->u.first, *end = list + cnt;
             nonempty++;
             do {
-                uint32_t p = *list++;
+                uint32_t l = *list++;
                 refs++;
                 if (mbox) {
-                    if (mbox[p] == stamp)
+                    if (mbox[l] == stamp)
                         continue;
-                    mbox[p] = stamp;
+                    mbox[l] = stamp;
                 }
                 tests++;
-                if (scene_isect(s, p, &r, tmax, &h)) {
+                if (kd_local_isect(s, &loc[l], &r, tmax, &h)) {
                     found = 1;
                     break;
                 }

@@ -92,6 +92,12 @@ typedef struct kd_tree {
     uint32_t nnodes, cap_nodes;
     uint32_t *prims; /* leaf index lists */
     size_t nprims, cap_prims;
+    /* The traversal's copy (kd_local.h), made once the tree is built: the
+     * leaf lists again in local numbers (nprims entries, parallel to prims),
+     * and nloc records; NULL until then. */
+    uint32_t *lref;
+    struct kd_local *loc;
+    uint32_t nloc;
     bsp_box box;    /* root cell: the scene bounds grown by pad */
     double pad;     /* bounds padding used for assignment */
     int max_depth;  /* the enforced limit (sizes the traversal stack) */

@@ -132,7 +132,7 @@ ISECT_INLINE int sphere_isect(const sphere_shape *s, const isect_ray *ray, doubl
  * TS further on, SHIFTED) to the triangle, as triangle_isect describes;
  * returns 1 on a hit, 0 on a miss, and -1 when a hit fails only the hit
  * check. */
-ISECT_INLINE int triangle_solve(const triangle_shape *tr, const isect_ray *ray, bsp_vec3 org,
+ISECT_INLINE int triangle_solve(const triangle_edges *tr, const isect_ray *ray, bsp_vec3 org,
                                 double ts, const int shifted, double tmax, double *t,
                                 double *bu_out, double *bv_out, double *det_out)
 {
@@ -190,7 +190,7 @@ ISECT_INLINE int triangle_solve(const triangle_shape *tr, const isect_ray *ray, 
  * real hit fails the check; from the near point it passes. A phantom fails
  * here too: its determinant is noise whatever the origin. Not inlined: taken
  * only after a failed check. */
-static __attribute__((noinline, unused)) int triangle_isect_near(const triangle_shape *tr,
+static __attribute__((noinline, unused)) int triangle_isect_near(const triangle_edges *tr,
                                                                  const isect_ray *ray, double tmax,
                                                                  double *t, double *bu_out,
                                                                  double *bv_out, double *det_out)
@@ -203,7 +203,7 @@ static __attribute__((noinline, unused)) int triangle_isect_near(const triangle_
 /* On a hit also writes the unnormalised barycentrics and the (positive)
  * determinant: u = *bu / *det, v = *bv / *det, computed only for the final
  * hit by triangle_uv. */
-ISECT_INLINE int triangle_isect(const triangle_shape *tr, const isect_ray *ray, double tmax,
+ISECT_INLINE int triangle_isect(const triangle_edges *tr, const isect_ray *ray, double tmax,
                                 double *t, double *bu_out, double *bv_out, double *det_out)
 {
     int r = triangle_solve(tr, ray, ray->org, 0.0, 0, tmax, t, bu_out, bv_out, det_out);

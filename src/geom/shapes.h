@@ -50,9 +50,21 @@ typedef struct sphere_shape {
     int inside_only; /* NFF negative radius: only the inside is visible */
 } sphere_shape;
 
+/* What the triangle kernel reads (geom/isect.h): the kd-tree's leaf-ordered
+ * copy of the primitives (accel/kd_local.h) holds this part alone. */
+typedef struct triangle_edges {
+    bsp_vec3 v0;     /* first vertex */
+    bsp_vec3 e1, e2; /* v1 - v0, v2 - v0 */
+} triangle_edges;
+
 typedef struct triangle_shape {
-    bsp_vec3 v0;       /* first vertex */
-    bsp_vec3 e1, e2;   /* v1 - v0, v2 - v0 */
+    union { /* the kernel's part, also by name: tr->v0 is tr->edges.v0 */
+        triangle_edges edges;
+        struct {
+            bsp_vec3 v0;     /* first vertex */
+            bsp_vec3 e1, e2; /* v1 - v0, v2 - v0 */
+        };
+    };
     bsp_vec3 normal;   /* unit normal of e1 x e2 (the vertex winding) */
     uint32_t normals;  /* first of 3 vertex normals in the pool, or SHAPE_NO_NORMALS */
 } triangle_shape;

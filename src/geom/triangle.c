@@ -77,7 +77,7 @@ int triangle_intersect(const triangle_shape *tr, const bsp_ray *ray, double *t, 
     isect_ray r;
     isect_ray_init(&r, ray, INFINITY); /* no hit check: it needs the scene scale */
     double bu, bv, det;
-    if (!triangle_isect(tr, &r, ray->tmax, t, &bu, &bv, &det))
+    if (!triangle_isect(&tr->edges, &r, ray->tmax, t, &bu, &bv, &det))
         return 0;
     triangle_uv(bu, bv, det, u, v);
     return 1;

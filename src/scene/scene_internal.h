@@ -187,29 +187,31 @@ typedef struct scene_isect_hit {
     double t, bu, bv, det;
 } scene_isect_hit;
 
-/* Intersection dispatch used by every accelerator (inline, with the kernels
- * of geom/isect.h): the t computed never depends on ray->tmin / TMAX,
- * which only filter. Writes *H only on a hit. */
+/* The kernel of a shape of kind SHAPE (shape_kind) whose data is at DATA
+ * (its triangle_edges, sphere_shape, polygon_shape or cone_shape, in the
+ * scene or a copy of it: the kd-tree's, accel/kd_local.h), inline with the
+ * kernels of geom/isect.h; polygons read S's vertex and slab pools. The t
+ * computed never depends on ray->tmin / TMAX, which only filter. Writes *H
+ * only on a hit. */
 static inline __attribute__((always_inline)) int
-scene_isect(const bsp_scene *s, uint32_t prim, const isect_ray *ray, double tmax,
-            scene_isect_hit *h)
+shape_isect(const bsp_scene *s, unsigned shape, const void *data, const isect_ray *ray,
+            double tmax, scene_isect_hit *h)
 {
-    const prim_record *p = &s->prims[prim];
     /* triangles first: the switch's compare tree costs them 2-3 more
      * instructions per test (tetra, teapot and nurbtst are all triangles) */
-    if (__builtin_expect(p->shape == SHAPE_TRIANGLE, 1))
-        return triangle_isect(&s->triangles[p->slot], ray, tmax, &h->t, &h->bu, &h->bv, &h->det);
-    switch ((shape_kind)p->shape) {
+    if (__builtin_expect(shape == SHAPE_TRIANGLE, 1))
+        return triangle_isect(data, ray, tmax, &h->t, &h->bu, &h->bv, &h->det);
+    switch ((shape_kind)shape) {
     case SHAPE_SPHERE:
-        if (!sphere_isect(&s->spheres[p->slot], ray, tmax, &h->t))
+        if (!sphere_isect(data, ray, tmax, &h->t))
             return 0;
         break;
     case SHAPE_POLYGON:
-        if (!polygon_isect(&s->polygons[p->slot], s->verts, &s->slabs, ray, tmax, &h->t))
+        if (!polygon_isect(data, s->verts, &s->slabs, ray, tmax, &h->t))
             return 0;
         break;
     case SHAPE_CONE:
-        if (!cone_isect(&s->cones[p->slot], ray, tmax, &h->t))
+        if (!cone_isect(data, ray, tmax, &h->t))
             return 0;
         break;
     default:
@@ -219,6 +221,33 @@ scene_isect(const bsp_scene *s, uint32_t prim, const isect_ray *ray, double tmax
     h->bv = 0.0;
     h->det = 1.0;
     return 1;
+}
+
+/* Intersection of primitive PRIM of S (shape_isect on the scene's data), as
+ * the naive method tests it. */
+static inline __attribute__((always_inline)) int
+scene_isect(const bsp_scene *s, uint32_t prim, const isect_ray *ray, double tmax,
+            scene_isect_hit *h)
+{
+    const prim_record *p = &s->prims[prim];
+    const void *data;
+    switch ((shape_kind)p->shape) {
+    case SHAPE_TRIANGLE:
+        data = &s->triangles[p->slot].edges;
+        break;
+    case SHAPE_SPHERE:
+        data = &s->spheres[p->slot];
+        break;
+    case SHAPE_POLYGON:
+        data = &s->polygons[p->slot];
+        break;
+    case SHAPE_CONE:
+        data = &s->cones[p->slot];
+        break;
+    default:
+        return 0;
+    }
+    return shape_isect(s, p->shape, data, ray, tmax, h);
 }
 
 /* The public hit record of H on primitive PRIM. */

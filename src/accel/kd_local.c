@@ -1,0 +1,154 @@
+/*
+ * kd_local.c — the traversal's copy of the primitives in leaf order
+ * (contract and reasons in kd_local.h).
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "accel/kd_local.h"
+#include "util/bigmem.h"
+
+/* The record of primitive P of S: its kernel's data and its index. */
+static void local_fill(kd_local *L, const bsp_scene *s, uint32_t p)
+{
+    const prim_record *r = &s->prims[p];
+    memset(L, 0, sizeof *L);
+    L->prim = p;
+    L->shape = r->shape;
+    switch ((shape_kind)r->shape) {
+    case SHAPE_TRIANGLE:
+        L->u.triangle = s->triangles[r->slot].edges;
+        break;
+    case SHAPE_SPHERE:
+        L->u.sphere = s->spheres[r->slot];
+        break;
+    case SHAPE_POLYGON:
+        L->u.polygon = s->polygons[r->slot];
+        break;
+    case SHAPE_CONE:
+        L->u.cone = &s->cones[r->slot];
+        break;
+    default: /* dropped primitives are in no leaf */
+        break;
+    }
+}
+
+int kd_local_build(kd_tree *t, const bsp_scene *scene)
+{
+    free(t->lref);
+    free(t->loc);
+    t->lref = NULL;
+    t->loc = NULL;
+    t->nloc = 0;
+    size_t np = scene->nprims;
+    /* number[p]: p's local number + 1, 0 while unlisted */
+    uint32_t *number = calloc(np ? np : 1, sizeof *number);
+    uint32_t *lref = bigmem_malloc((t->nprims ? t->nprims : 1) * sizeof *lref);
+    if (!number || !lref) {
+        free(number);
+        free(lref);
+        return 0;
+    }
+    /* leaves in node order: the depth-first order of the tree */
+    uint32_t nloc = 0;
+    for (uint32_t i = 0; i < t->nnodes; i++) {
+        const kd_node *n = &t->nodes[i];
+        if (!kd_is_leaf(n))
+            continue;
+        for (uint32_t j = n->u.first, end = j + kd_count(n); j < end; j++) {
+            uint32_t p = t->prims[j];
+            if (!number[p])
+                number[p] = ++nloc;
+            lref[j] = number[p] - 1;
+        }
+    }
+    kd_local *loc = bigmem_malloc((nloc ? nloc : 1) * sizeof *loc);
+    if (!loc) {
+        free(number);
+        free(lref);
+        return 0;
+    }
+    for (uint32_t p = 0; p < np; p++)
+        if (number[p])
+            local_fill(&loc[number[p] - 1], scene, p);
+    free(number);
+    t->lref = lref;
+    t->loc = loc;
+    t->nloc = nloc;
+    return 1;
+}
+
+/* Whether record L holds primitive L->prim's data bit for bit (members
+ * compared, not padding). */
+static int local_matches(const kd_local *L, const bsp_scene *s)
+{
+    const prim_record *r = &s->prims[L->prim];
+    if (L->shape != r->shape)
+        return 0;
+    switch ((shape_kind)r->shape) {
+    case SHAPE_TRIANGLE: /* nine doubles, no padding */
+        return memcmp(&L->u.triangle, &s->triangles[r->slot].edges, sizeof(triangle_edges)) == 0;
+    case SHAPE_SPHERE: {
+        const sphere_shape *a = &L->u.sphere, *b = &s->spheres[r->slot];
+        return memcmp(&a->center, &b->center, sizeof a->center) == 0 &&
+               memcmp(&a->radius, &b->radius, sizeof a->radius) == 0 &&
+               memcmp(&a->radius2, &b->radius2, sizeof a->radius2) == 0 &&
+               a->inside_only == b->inside_only;
+    }
+    case SHAPE_POLYGON: {
+        const polygon_shape *a = &L->u.polygon, *b = &s->polygons[r->slot];
+        return memcmp(&a->normal, &b->normal, sizeof a->normal) == 0 &&
+               memcmp(&a->d, &b->d, sizeof a->d) == 0 && a->first == b->first &&
+               a->count == b->count && a->normals == b->normals && a->axis_u == b->axis_u &&
+               a->axis_v == b->axis_v && a->slab_first == b->slab_first &&
+               a->nslabs == b->nslabs;
+    }
+    case SHAPE_CONE:
+        return L->u.cone == &s->cones[r->slot];
+    default: /* a dropped primitive has no record */
+        return 0;
+    }
+}
+
+bsp_status kd_local_check(const kd_tree *t, const bsp_scene *scene, bsp_error *err)
+{
+    if (!t->lref || !t->loc)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "kd-tree: no local copy of the primitives");
+    if (t->nloc > scene->nprims)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "kd-tree: %u local records for %zu primitives",
+                         t->nloc, scene->nprims);
+    /* the next record a walk of the leaves in node order must meet first */
+    uint32_t next = 0;
+    for (uint32_t i = 0; i < t->nnodes; i++) {
+        const kd_node *n = &t->nodes[i];
+        if (!kd_is_leaf(n))
+            continue;
+        for (uint32_t j = n->u.first, end = j + kd_count(n); j < end; j++) {
+            uint32_t l = t->lref[j];
+            if (l > next || l >= t->nloc)
+                return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                                 "kd-tree: leaf %u lists local record %u before record %u", i, l,
+                                 next);
+            if (t->loc[l].prim != t->prims[j])
+                return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                                 "kd-tree: leaf %u: local record %u is primitive %u, not %u", i, l,
+                                 t->loc[l].prim, t->prims[j]);
+            if (l == next)
+                next++;
+        }
+    }
+    if (next != t->nloc)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                         "kd-tree: %u local records, %u of them listed", t->nloc, next);
+    for (uint32_t l = 0; l < t->nloc; l++) {
+        if (t->loc[l].prim >= scene->nprims)
+            return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                             "kd-tree: local record %u names primitive %u of %zu", l,
+                             t->loc[l].prim, scene->nprims);
+        if (!local_matches(&t->loc[l], scene))
+            return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                             "kd-tree: local record %u differs from primitive %u's data", l,
+                             t->loc[l].prim);
+    }
+    return BSP_OK;
+}

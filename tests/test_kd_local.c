@@ -1,0 +1,202 @@
+/*
+ * test_kd_local.c — the traversal's leaf-ordered copy of the primitives
+ * (src/accel/kd_local.h): numbered by first appearance in a walk of the
+ * leaves in node order, each record the scene's data bit for bit, the leaf
+ * lists the same primitives in that numbering; and the checker
+ * (bsp_accel_check) refuses a copy that differs in any of those ways.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "accel/kd_local.h"
+#include "harness.h"
+
+static bsp_accel *build_kind(const bsp_scene *s, bsp_accel_kind kind)
+{
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = kind;
+    o.threads = 1;
+    bsp_accel *a = NULL;
+    bsp_error err;
+    bsp_status st = bsp_accel_build(s, &o, &a, &err);
+    CHECK_MSG(st == BSP_OK, "build: %s", err.message);
+    if (st != BSP_OK)
+        harness_abort_test();
+    return a;
+}
+
+/* The scene's data of primitive P as the record must hold it. */
+static int same_as_scene(const bsp_scene *s, const kd_local *L, uint32_t p)
+{
+    const prim_record *r = &s->prims[p];
+    if (L->prim != p || L->shape != r->shape)
+        return 0;
+    switch ((shape_kind)r->shape) {
+    case SHAPE_TRIANGLE: {
+        const triangle_shape *tr = &s->triangles[r->slot];
+        return memcmp(&L->u.triangle.v0, &tr->v0, sizeof tr->v0) == 0 &&
+               memcmp(&L->u.triangle.e1, &tr->e1, sizeof tr->e1) == 0 &&
+               memcmp(&L->u.triangle.e2, &tr->e2, sizeof tr->e2) == 0;
+    }
+    case SHAPE_SPHERE: {
+        const sphere_shape *sp = &s->spheres[r->slot];
+        return memcmp(&L->u.sphere.center, &sp->center, sizeof sp->center) == 0 &&
+               L->u.sphere.radius == sp->radius && L->u.sphere.radius2 == sp->radius2 &&
+               L->u.sphere.inside_only == sp->inside_only;
+    }
+    case SHAPE_POLYGON: {
+        const polygon_shape *pg = &s->polygons[r->slot];
+        return L->u.polygon.first == pg->first && L->u.polygon.count == pg->count &&
+               L->u.polygon.d == pg->d && L->u.polygon.nslabs == pg->nslabs &&
+               L->u.polygon.axis_u == pg->axis_u && L->u.polygon.axis_v == pg->axis_v;
+    }
+    case SHAPE_CONE:
+        return L->u.cone == &s->cones[r->slot];
+    default:
+        return 0;
+    }
+}
+
+/* On scenes of every shape (mount: triangles and spheres; gears: quads and
+ * 144-gons with slabs; rings: spheres and cones; sample: a bit of each),
+ * with both rules: the numbering is recomputed here from the leaf lists
+ * alone and must be the copy's, record for record. */
+TEST(kd_local_copies_every_listed_primitive_in_leaf_order)
+{
+    const char *specs[] = {"spd:mount:2", "spd:gears:2", "spd:rings:2", "spd:sample"};
+    bsp_accel_kind kinds[] = {BSP_ACCEL_SAH, BSP_ACCEL_KAPLAN};
+    for (size_t si = 0; si < sizeof specs / sizeof *specs; si++) {
+        bsp_scene *s = NULL;
+        bsp_error err;
+        REQUIRE(bsp_scene_load(specs[si], &s, &err) == BSP_OK);
+        for (size_t ki = 0; ki < 2; ki++) {
+            bsp_accel *a = build_kind(s, kinds[ki]);
+            const kd_tree *t = a->impl;
+            uint32_t *number = malloc(s->nprims * sizeof *number);
+            REQUIRE(number);
+            for (size_t p = 0; p < s->nprims; p++)
+                number[p] = UINT32_MAX;
+            uint32_t next = 0;
+            size_t bad = 0, shapes[SHAPE_CONE + 1] = {0};
+            for (uint32_t i = 0; i < t->nnodes; i++) {
+                const kd_node *n = &t->nodes[i];
+                if (!kd_is_leaf(n))
+                    continue;
+                for (uint32_t j = n->u.first; j < n->u.first + kd_count(n); j++) {
+                    uint32_t p = t->prims[j];
+                    if (number[p] == UINT32_MAX) {
+                        number[p] = next++;
+                        if (s->prims[p].shape <= SHAPE_CONE)
+                            shapes[s->prims[p].shape]++;
+                    }
+                    bad += t->lref[j] != number[p];
+                }
+            }
+            CHECK_MSG(bad == 0, "%s: %zu leaf entries in another numbering", specs[si], bad);
+            CHECK_MSG(t->nloc == next, "%s: %u records for %u listed primitives", specs[si],
+                      t->nloc, next);
+            for (size_t p = 0; p < s->nprims; p++)
+                if (number[p] != UINT32_MAX && number[p] < t->nloc)
+                    bad += !same_as_scene(s, &t->loc[number[p]], (uint32_t)p);
+            CHECK_MSG(bad == 0, "%s: %zu records differ from the scene", specs[si], bad);
+            CHECK_MSG(bsp_accel_check(a, &err) == BSP_OK, "%s: %s", specs[si], err.message);
+            bsp_tree_stats st;
+            bsp_accel_tree_stats(a, &st);
+            CHECK(st.trace_bytes == (uint64_t)t->nloc * sizeof(kd_local) +
+                                        (uint64_t)t->nprims * sizeof(uint32_t));
+            /* the scenes give the copy the shapes it must cover */
+            if (si == 0)
+                CHECK(shapes[SHAPE_TRIANGLE] > 0 && shapes[SHAPE_SPHERE] > 0);
+            if (si == 1)
+                CHECK(shapes[SHAPE_POLYGON] > 0);
+            if (si == 2)
+                CHECK(shapes[SHAPE_CONE] > 0 && shapes[SHAPE_SPHERE] > 0);
+            free(number);
+            bsp_accel_destroy(a);
+        }
+        bsp_scene_destroy(s);
+    }
+}
+
+/* Whether the checker accepts A's tree (prints nothing). */
+static int accepted(const bsp_accel *a)
+{
+    bsp_error err;
+    return bsp_accel_check(a, &err) == BSP_OK;
+}
+
+/* A copy that no longer matches — one bit of a triangle, a sphere's radius,
+ * a leaf entry naming another record, two records swapped with their
+ * entries (the same primitives, out of first-appearance order), one record
+ * fewer than the leaves name — is refused, and accepted again once restored. */
+TEST(kd_local_check_refuses_a_stale_copy)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load("spd:mount:2", &s, &err) == BSP_OK);
+    bsp_accel *a = build_kind(s, BSP_ACCEL_SAH);
+    kd_tree *t = a->impl;
+    REQUIRE(accepted(a));
+    REQUIRE(t->nloc >= 2 && t->nprims >= 2);
+
+    uint32_t tri = UINT32_MAX, sph = UINT32_MAX;
+    for (uint32_t l = 0; l < t->nloc; l++) {
+        if (t->loc[l].shape == SHAPE_TRIANGLE && tri == UINT32_MAX)
+            tri = l;
+        if (t->loc[l].shape == SHAPE_SPHERE && sph == UINT32_MAX)
+            sph = l;
+    }
+    REQUIRE(tri != UINT32_MAX && sph != UINT32_MAX);
+
+    kd_local keep = t->loc[tri];
+    uint64_t bits;
+    memcpy(&bits, &t->loc[tri].u.triangle.e1.x, sizeof bits);
+    bits ^= 1; /* one ulp */
+    memcpy(&t->loc[tri].u.triangle.e1.x, &bits, sizeof bits);
+    CHECK(!accepted(a));
+    t->loc[tri] = keep;
+    CHECK(accepted(a));
+
+    keep = t->loc[sph];
+    t->loc[sph].u.sphere.radius *= 1.5;
+    CHECK(!accepted(a));
+    t->loc[sph] = keep;
+    CHECK(accepted(a));
+
+    /* an entry naming another record (the last entry's, where it differs) */
+    size_t j = 0;
+    while (j + 1 < t->nprims && t->lref[j] == t->lref[t->nprims - 1])
+        j++;
+    uint32_t e = t->lref[j];
+    t->lref[j] = t->lref[t->nprims - 1];
+    CHECK(!accepted(a));
+    t->lref[j] = e;
+    CHECK(accepted(a));
+
+    /* records 0 and 1 swapped, with every entry: each entry still names its
+     * primitive's record, but record 1 comes first */
+    kd_local r0 = t->loc[0];
+    t->loc[0] = t->loc[1];
+    t->loc[1] = r0;
+    for (size_t k = 0; k < t->nprims; k++)
+        if (t->lref[k] < 2)
+            t->lref[k] ^= 1;
+    CHECK(!accepted(a));
+    r0 = t->loc[0];
+    t->loc[0] = t->loc[1];
+    t->loc[1] = r0;
+    for (size_t k = 0; k < t->nprims; k++)
+        if (t->lref[k] < 2)
+            t->lref[k] ^= 1;
+    CHECK(accepted(a));
+
+    /* one record fewer than the leaves name */
+    t->nloc--;
+    CHECK(!accepted(a));
+    t->nloc++;
+    CHECK(accepted(a));
+
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}
