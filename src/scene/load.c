@@ -1,9 +1,9 @@
 /*
  * load.c — bsp_scene_load: one entry point for every kind of scene a user
  * names. "spd:NAME[:SIZE]" is generated in code (src/spd); a name ending in
- * ".obj" or ".ply" (any case) is read as a Wavefront OBJ or PLY mesh
- * (src/scene/obj.c, ply.c); anything else is read as NFF (plain or gzip,
- * detected by content).
+ * ".obj" or ".ply" (any case), or in either and ".gz", is read as a
+ * Wavefront OBJ or PLY mesh (src/scene/obj.c, ply.c); anything else is read
+ * as NFF. Every reader inflates gzip input, detected by content (gunzip.c).
  */
 #include <string.h>
 
@@ -32,9 +32,9 @@ bsp_status bsp_scene_load(const char *path, bsp_scene **out, bsp_error *err)
         *out = NULL;
     if (path && strncmp(path, "spd:", 4) == 0)
         return spd_scene_generate_spec(path, out, err);
-    if (path && has_extension(path, ".obj"))
+    if (path && (has_extension(path, ".obj") || has_extension(path, ".obj.gz")))
         return obj_load_file(path, out, err);
-    if (path && has_extension(path, ".ply"))
+    if (path && (has_extension(path, ".ply") || has_extension(path, ".ply.gz")))
         return ply_load_file(path, out, err);
     return nff_load_file(path, out, err);
 }

@@ -51,10 +51,8 @@ HIDDEN const char *mesh_show_token(const char *s, size_t len, char *buf, size_t 
  * MESH_MAX_INPUT are refused before reading. Errors are "PATH: ...". */
 HIDDEN bsp_status mesh_read_file(const char *path, char **out, size_t *outlen, bsp_error *err);
 
-/* A reader's parser: BUF[0..LEN) named NAME (a path or "<memory>") into a
- * new scene *OUT. */
-typedef bsp_status (*mesh_parse_fn)(const char *buf, size_t len, const char *name,
-                                    bsp_scene **out, bsp_error *err);
+/* A reader's parser (scene_internal.h). */
+typedef scene_parse_fn mesh_parse_fn;
 /* The loaders' common entry checks (output pointer, buffer, size limit)
  * around PARSE, for memory input and for a file read whole. */
 HIDDEN bsp_status mesh_load_memory(mesh_parse_fn parse, const char *buf, size_t len,

@@ -896,13 +896,20 @@ static bsp_status parse_obj(const char *buf, size_t len, const char *name, bsp_s
     return BSP_OK;
 }
 
+/* parse_obj on plain or gzip input. */
+static bsp_status parse_obj_any(const char *buf, size_t len, const char *name, bsp_scene **out,
+                                bsp_error *err)
+{
+    return scene_parse_maybe_gzip(parse_obj, buf, len, name, MESH_MAX_INPUT, 0, out, err);
+}
+
 bsp_status obj_load_memory(const char *buf, size_t len, const char *name, bsp_scene **out,
                            bsp_error *err)
 {
-    return mesh_load_memory(parse_obj, buf, len, name, out, err);
+    return mesh_load_memory(parse_obj_any, buf, len, name, out, err);
 }
 
 bsp_status obj_load_file(const char *path, bsp_scene **out, bsp_error *err)
 {
-    return mesh_load_file(parse_obj, path, out, err);
+    return mesh_load_file(parse_obj_any, path, out, err);
 }

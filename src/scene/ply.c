@@ -862,13 +862,20 @@ done:
     return BSP_OK;
 }
 
+/* parse_ply on plain or gzip input. */
+static bsp_status parse_ply_any(const char *buf, size_t len, const char *name, bsp_scene **out,
+                                bsp_error *err)
+{
+    return scene_parse_maybe_gzip(parse_ply, buf, len, name, MESH_MAX_INPUT, 0, out, err);
+}
+
 bsp_status ply_load_memory(const char *buf, size_t len, const char *name, bsp_scene **out,
                            bsp_error *err)
 {
-    return mesh_load_memory(parse_ply, buf, len, name, out, err);
+    return mesh_load_memory(parse_ply_any, buf, len, name, out, err);
 }
 
 bsp_status ply_load_file(const char *path, bsp_scene **out, bsp_error *err)
 {
-    return mesh_load_file(parse_ply, path, out, err);
+    return mesh_load_file(parse_ply_any, path, out, err);
 }

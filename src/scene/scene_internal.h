@@ -179,6 +179,24 @@ HIDDEN bsp_status nff_load_file(const char *path, bsp_scene **out, bsp_error *er
 HIDDEN bsp_status obj_load_file(const char *path, bsp_scene **out, bsp_error *err);
 HIDDEN bsp_status ply_load_file(const char *path, bsp_scene **out, bsp_error *err);
 
+/* Whether BUF[0..LEN) starts as gzip data does (magic bytes 1f 8b). */
+HIDDEN int scene_is_gzip(const char *buf, size_t len);
+/* Inflates the gzip (or zlib) data IN[0..INLEN), concatenated members
+ * included, into a new buffer *OUT of *OUTLEN bytes (free with free());
+ * BSP_ERR_LIMIT when it inflates to more than LIMIT bytes, BSP_ERR_PARSE
+ * for corrupt or truncated data. Errors are "NAME: ...". (gunzip.c) */
+HIDDEN bsp_status scene_gunzip(const char *in, size_t inlen, const char *name, size_t limit,
+                               char **out, size_t *outlen, bsp_error *err);
+/* A reader's parser: BUF[0..LEN) named NAME (a path or "<memory>") into a
+ * new scene *OUT. */
+typedef bsp_status (*scene_parse_fn)(const char *buf, size_t len, const char *name,
+                                     bsp_scene **out, bsp_error *err);
+/* PARSE on BUF[0..LEN), inflated first (scene_gunzip, under LIMIT) when it
+ * is gzip data or GZIP is set. */
+HIDDEN bsp_status scene_parse_maybe_gzip(scene_parse_fn parse, const char *buf, size_t len,
+                                         const char *name, size_t limit, int gzip,
+                                         bsp_scene **out, bsp_error *err);
+
 /* A hit of one primitive as the intersection loops keep it: t, and for
  * triangles the unnormalised barycentrics and determinant (u = bu / det,
  * v = bv / det, divided out once for the final hit by scene_hit_finish);
