@@ -128,8 +128,8 @@ static int accepted(const bsp_accel *a)
 
 /* A copy that no longer matches — one bit of a triangle, a sphere's radius,
  * a leaf entry naming another record, two records swapped with their
- * entries (the same primitives, out of first-appearance order), one record
- * fewer than the leaves name — is refused, and accepted again once restored. */
+ * entries (the same primitives, out of first-appearance order), a second
+ * record of one primitive, one record fewer than the leaves name — is refused, and accepted again once restored. */
 TEST(kd_local_check_refuses_a_stale_copy)
 {
     bsp_scene *s = NULL;
@@ -190,6 +190,26 @@ TEST(kd_local_check_refuses_a_stale_copy)
         if (t->lref[k] < 2)
             t->lref[k] ^= 1;
     CHECK(accepted(a));
+
+    /* record 1 a second record of record 0's primitive, the lists changed to
+     * match (the tree's own check would refuse those lists, so the copy's
+     * check is asked alone) */
+    {
+        uint32_t p0 = t->loc[0].prim, p1 = t->loc[1].prim;
+        kd_local r1 = t->loc[1];
+        t->loc[1] = t->loc[0];
+        for (size_t k = 0; k < t->nprims; k++)
+            if (t->lref[k] == 1)
+                t->prims[k] = p0;
+        CHECK(kd_local_check(t, s, &err) != BSP_OK);
+        CHECK_STR_CONTAINS(err.message, "second local record");
+        t->loc[1] = r1;
+        for (size_t k = 0; k < t->nprims; k++)
+            if (t->lref[k] == 1)
+                t->prims[k] = p1;
+        CHECK(kd_local_check(t, s, &err) == BSP_OK);
+        CHECK(accepted(a));
+    }
 
     /* one record fewer than the leaves name */
     t->nloc--;

@@ -125,7 +125,10 @@ bsp_status kd_local_check(const kd_tree *t, const bsp_scene *scene, bsp_error *e
             continue;
         for (uint32_t j = n->u.first, end = j + kd_count(n); j < end; j++) {
             uint32_t l = t->lref[j];
-            if (l > next || l >= t->nloc)
+            if (l >= t->nloc)
+                return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                                 "kd-tree: leaf %u lists local record %u of %u", i, l, t->nloc);
+            if (l > next)
                 return error_set(err, BSP_ERR_INVALID, NULL, 0,
                                  "kd-tree: leaf %u lists local record %u before record %u", i, l,
                                  next);
@@ -140,15 +143,27 @@ bsp_status kd_local_check(const kd_tree *t, const bsp_scene *scene, bsp_error *e
     if (next != t->nloc)
         return error_set(err, BSP_ERR_INVALID, NULL, 0,
                          "kd-tree: %u local records, %u of them listed", t->nloc, next);
-    for (uint32_t l = 0; l < t->nloc; l++) {
-        if (t->loc[l].prim >= scene->nprims)
-            return error_set(err, BSP_ERR_INVALID, NULL, 0,
-                             "kd-tree: local record %u names primitive %u of %zu", l,
-                             t->loc[l].prim, scene->nprims);
-        if (!local_matches(&t->loc[l], scene))
-            return error_set(err, BSP_ERR_INVALID, NULL, 0,
-                             "kd-tree: local record %u differs from primitive %u's data", l,
-                             t->loc[l].prim);
+    /* one record per primitive: two would give it two mailbox stamps, and
+     * a ray could test it twice */
+    uint8_t *seen = calloc(scene->nprims ? scene->nprims : 1, 1);
+    if (!seen)
+        return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+    bsp_status st = BSP_OK;
+    for (uint32_t l = 0; l < t->nloc && st == BSP_OK; l++) {
+        uint32_t p = t->loc[l].prim;
+        if (p >= scene->nprims)
+            st = error_set(err, BSP_ERR_INVALID, NULL, 0,
+                           "kd-tree: local record %u names primitive %u of %zu", l, p,
+                           scene->nprims);
+        else if (seen[p])
+            st = error_set(err, BSP_ERR_INVALID, NULL, 0,
+                           "kd-tree: primitive %u has a second local record, %u", p, l);
+        else if (!local_matches(&t->loc[l], scene))
+            st = error_set(err, BSP_ERR_INVALID, NULL, 0,
+                           "kd-tree: local record %u differs from primitive %u's data", l, p);
+        else
+            seen[p] = 1;
     }
-    return BSP_OK;
+    free(seen);
+    return st;
 }

@@ -46,7 +46,8 @@ HIDDEN int kd_local_build(kd_tree *t, const bsp_scene *scene);
 
 /* Checks the copy against T's leaf lists and SCENE: every entry of lref names
  * a record of the same primitive as prims, every record is the scene's data
- * bit for bit and listed, first listed in its number's order. BSP_OK, or
+ * bit for bit and listed, first listed in its number's order, and no
+ * primitive has two records. BSP_OK, or
  * BSP_ERR_INVALID with the first violation. */
 HIDDEN bsp_status kd_local_check(const kd_tree *t, const bsp_scene *scene, bsp_error *err);
 

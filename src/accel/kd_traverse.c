@@ -300,7 +300,7 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
     uint64_t interior = 0, leaves = 0, nonempty = 0, refs = 0, tests = 0;
     const char *base = (const char *)t->nodes;
     size_t off = 0; /* the root */
-    const uint32_t *prims = t->lref; /* local numbers (kd_local.h) */
+    const uint32_t *lref = t->lref; /* the leaf lists in local numbers (kd_local.h) */
     const kd_local *loc = t->loc;
     exit_point *ex = stack;
     for (;;) {
@@ -309,7 +309,7 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
         uint32_t cnt = kd_count(n);
         leaves++;
         if (cnt) {
-            const uint32_t *list = prims + n->u.first, *end = list + cnt;
+            const uint32_t *list = lref + n->u.first, *end = list + cnt;
             nonempty++;
             refs += cnt;
             do {
@@ -363,7 +363,7 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
     uint64_t interior = 0, leaves = 0, nonempty = 0, refs = 0, tests = 0;
     const char *base = (const char *)t->nodes;
     size_t off = 0; /* the root */
-    const uint32_t *prims = t->lref; /* local numbers (kd_local.h) */
+    const uint32_t *lref = t->lref; /* the leaf lists in local numbers (kd_local.h) */
     const kd_local *loc = t->loc;
     exit_point *ex = stack;
     for (;;) {
@@ -372,7 +372,7 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
         uint32_t cnt = kd_count(n);
         leaves++;
         if (cnt) {
-            const uint32_t *list = prims + n->u.first, *end = list + cnt;
+            const uint32_t *list = lref + n->u.first, *end = list + cnt;
             nonempty++;
             do {
                 uint32_t l = *list++;
