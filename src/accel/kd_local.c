@@ -41,12 +41,16 @@ int kd_local_build(kd_tree *t, const bsp_scene *scene)
     t->loc = NULL;
     t->nloc = 0;
     size_t np = scene->nprims;
-    /* number[p]: p's local number + 1, 0 while unlisted */
+    /* number[p]: p's local number + 1, 0 while unlisted. Every listed
+     * primitive is live, so at most np records; the ones filled are written
+     * in order, and the pages of the rest are never touched. */
     uint32_t *number = calloc(np ? np : 1, sizeof *number);
     uint32_t *lref = bigmem_malloc((t->nprims ? t->nprims : 1) * sizeof *lref);
-    if (!number || !lref) {
+    kd_local *loc = bigmem_malloc((np ? np : 1) * sizeof *loc);
+    if (!number || !lref || !loc) {
         free(number);
         free(lref);
+        free(loc);
         return 0;
     }
     /* leaves in node order: the depth-first order of the tree */
@@ -57,20 +61,13 @@ int kd_local_build(kd_tree *t, const bsp_scene *scene)
             continue;
         for (uint32_t j = n->u.first, end = j + kd_count(n); j < end; j++) {
             uint32_t p = t->prims[j];
-            if (!number[p])
+            if (!number[p]) {
+                local_fill(&loc[nloc], scene, p);
                 number[p] = ++nloc;
+            }
             lref[j] = number[p] - 1;
         }
     }
-    kd_local *loc = bigmem_malloc((nloc ? nloc : 1) * sizeof *loc);
-    if (!loc) {
-        free(number);
-        free(lref);
-        return 0;
-    }
-    for (uint32_t p = 0; p < np; p++)
-        if (number[p])
-            local_fill(&loc[number[p] - 1], scene, p);
     free(number);
     t->lref = lref;
     t->loc = loc;
