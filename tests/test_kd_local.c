@@ -10,21 +10,7 @@
 
 #include "accel/kd_local.h"
 #include "harness.h"
-
-static bsp_accel *build_kind(const bsp_scene *s, bsp_accel_kind kind)
-{
-    bsp_build_options o;
-    bsp_build_options_defaults(&o);
-    o.kind = kind;
-    o.threads = 1;
-    bsp_accel *a = NULL;
-    bsp_error err;
-    bsp_status st = bsp_accel_build(s, &o, &a, &err);
-    CHECK_MSG(st == BSP_OK, "build: %s", err.message);
-    if (st != BSP_OK)
-        harness_abort_test();
-    return a;
-}
+#include "kd_test_util.h"
 
 /* The scene's data of primitive P as the record must hold it. */
 static int same_as_scene(const bsp_scene *s, const kd_local *L, uint32_t p)
@@ -62,68 +48,58 @@ static int same_as_scene(const bsp_scene *s, const kd_local *L, uint32_t p)
  * 144-gons with slabs; rings: spheres and cones; sample: a bit of each),
  * with both rules: the numbering is recomputed here from the leaf lists
  * alone and must be the copy's, record for record. */
+static void numbering_check(const bsp_scene *s, const bsp_accel *a, const char *spec, size_t scene,
+                            size_t kind, void *ctx)
+{
+    (void)kind, (void)ctx;
+    const kd_tree *t = a->impl;
+    uint32_t *number = malloc(s->nprims * sizeof *number);
+    REQUIRE(number);
+    for (size_t p = 0; p < s->nprims; p++)
+        number[p] = UINT32_MAX;
+    uint32_t next = 0;
+    size_t bad = 0, shapes[SHAPE_CONE + 1] = {0};
+    for (uint32_t i = 0; i < t->nnodes; i++) {
+        const kd_node *n = &t->nodes[i];
+        if (!kd_is_leaf(n))
+            continue;
+        for (uint32_t j = n->u.first; j < n->u.first + kd_count(n); j++) {
+            uint32_t p = t->prims[j];
+            if (number[p] == UINT32_MAX) {
+                number[p] = next++;
+                if (s->prims[p].shape <= SHAPE_CONE)
+                    shapes[s->prims[p].shape]++;
+            }
+            bad += t->lref[j] != number[p];
+        }
+    }
+    CHECK_MSG(bad == 0, "%s: %zu leaf entries in another numbering", spec, bad);
+    CHECK_MSG(t->nloc == next, "%s: %u records for %u listed primitives", spec,
+              t->nloc, next);
+    for (size_t p = 0; p < s->nprims; p++)
+        if (number[p] != UINT32_MAX && number[p] < t->nloc)
+            bad += !same_as_scene(s, &t->loc[number[p]], (uint32_t)p);
+    CHECK_MSG(bad == 0, "%s: %zu records differ from the scene", spec, bad);
+    CHECK_MSG(kd_test_accepted(a), "%s: the checker refuses the tree", spec);
+    bsp_tree_stats st;
+    bsp_accel_tree_stats(a, &st);
+    CHECK(st.trace_bytes == (uint64_t)t->nloc * sizeof(kd_local) +
+                                (uint64_t)t->nprims * sizeof(uint32_t) +
+                                ((uint64_t)t->nnodes + 1) * sizeof(kd_node));
+    /* the scenes give the copy the shapes it must cover */
+    if (scene == 0)
+        CHECK(shapes[SHAPE_TRIANGLE] > 0 && shapes[SHAPE_SPHERE] > 0);
+    if (scene == 1)
+        CHECK(shapes[SHAPE_POLYGON] > 0);
+    if (scene == 2)
+        CHECK(shapes[SHAPE_CONE] > 0 && shapes[SHAPE_SPHERE] > 0);
+    free(number);
+}
+
 TEST(kd_local_copies_every_listed_primitive_in_leaf_order)
 {
     const char *specs[] = {"spd:mount:2", "spd:gears:2", "spd:rings:2", "spd:sample"};
-    bsp_accel_kind kinds[] = {BSP_ACCEL_SAH, BSP_ACCEL_KAPLAN};
-    for (size_t si = 0; si < sizeof specs / sizeof *specs; si++) {
-        bsp_scene *s = NULL;
-        bsp_error err;
-        REQUIRE(bsp_scene_load(specs[si], &s, &err) == BSP_OK);
-        for (size_t ki = 0; ki < 2; ki++) {
-            bsp_accel *a = build_kind(s, kinds[ki]);
-            const kd_tree *t = a->impl;
-            uint32_t *number = malloc(s->nprims * sizeof *number);
-            REQUIRE(number);
-            for (size_t p = 0; p < s->nprims; p++)
-                number[p] = UINT32_MAX;
-            uint32_t next = 0;
-            size_t bad = 0, shapes[SHAPE_CONE + 1] = {0};
-            for (uint32_t i = 0; i < t->nnodes; i++) {
-                const kd_node *n = &t->nodes[i];
-                if (!kd_is_leaf(n))
-                    continue;
-                for (uint32_t j = n->u.first; j < n->u.first + kd_count(n); j++) {
-                    uint32_t p = t->prims[j];
-                    if (number[p] == UINT32_MAX) {
-                        number[p] = next++;
-                        if (s->prims[p].shape <= SHAPE_CONE)
-                            shapes[s->prims[p].shape]++;
-                    }
-                    bad += t->lref[j] != number[p];
-                }
-            }
-            CHECK_MSG(bad == 0, "%s: %zu leaf entries in another numbering", specs[si], bad);
-            CHECK_MSG(t->nloc == next, "%s: %u records for %u listed primitives", specs[si],
-                      t->nloc, next);
-            for (size_t p = 0; p < s->nprims; p++)
-                if (number[p] != UINT32_MAX && number[p] < t->nloc)
-                    bad += !same_as_scene(s, &t->loc[number[p]], (uint32_t)p);
-            CHECK_MSG(bad == 0, "%s: %zu records differ from the scene", specs[si], bad);
-            CHECK_MSG(bsp_accel_check(a, &err) == BSP_OK, "%s: %s", specs[si], err.message);
-            bsp_tree_stats st;
-            bsp_accel_tree_stats(a, &st);
-            CHECK(st.trace_bytes == (uint64_t)t->nloc * sizeof(kd_local) +
-                                        (uint64_t)t->nprims * sizeof(uint32_t));
-            /* the scenes give the copy the shapes it must cover */
-            if (si == 0)
-                CHECK(shapes[SHAPE_TRIANGLE] > 0 && shapes[SHAPE_SPHERE] > 0);
-            if (si == 1)
-                CHECK(shapes[SHAPE_POLYGON] > 0);
-            if (si == 2)
-                CHECK(shapes[SHAPE_CONE] > 0 && shapes[SHAPE_SPHERE] > 0);
-            free(number);
-            bsp_accel_destroy(a);
-        }
-        bsp_scene_destroy(s);
-    }
-}
-
-/* Whether the checker accepts A's tree (prints nothing). */
-static int accepted(const bsp_accel *a)
-{
-    bsp_error err;
-    return bsp_accel_check(a, &err) == BSP_OK;
+    kd_test_each_tree(specs, sizeof specs / sizeof *specs, numbering_check, NULL);
 }
 
 /* A copy that no longer matches — one bit of a triangle, a sphere's radius,
@@ -135,9 +111,9 @@ TEST(kd_local_check_refuses_a_stale_copy)
     bsp_scene *s = NULL;
     bsp_error err;
     REQUIRE(bsp_scene_load("spd:mount:2", &s, &err) == BSP_OK);
-    bsp_accel *a = build_kind(s, BSP_ACCEL_SAH);
+    bsp_accel *a = kd_test_build(s, BSP_ACCEL_SAH);
     kd_tree *t = a->impl;
-    REQUIRE(accepted(a));
+    REQUIRE(kd_test_accepted(a));
     REQUIRE(t->nloc >= 2 && t->nprims >= 2);
 
     uint32_t tri = UINT32_MAX, sph = UINT32_MAX;
@@ -154,15 +130,15 @@ TEST(kd_local_check_refuses_a_stale_copy)
     memcpy(&bits, &t->loc[tri].u.triangle.e1.x, sizeof bits);
     bits ^= 1; /* one ulp */
     memcpy(&t->loc[tri].u.triangle.e1.x, &bits, sizeof bits);
-    CHECK(!accepted(a));
+    CHECK(!kd_test_accepted(a));
     t->loc[tri] = keep;
-    CHECK(accepted(a));
+    CHECK(kd_test_accepted(a));
 
     keep = t->loc[sph];
     t->loc[sph].u.sphere.radius *= 1.5;
-    CHECK(!accepted(a));
+    CHECK(!kd_test_accepted(a));
     t->loc[sph] = keep;
-    CHECK(accepted(a));
+    CHECK(kd_test_accepted(a));
 
     /* an entry naming another record (the last entry's, where it differs) */
     size_t j = 0;
@@ -170,9 +146,9 @@ TEST(kd_local_check_refuses_a_stale_copy)
         j++;
     uint32_t e = t->lref[j];
     t->lref[j] = t->lref[t->nprims - 1];
-    CHECK(!accepted(a));
+    CHECK(!kd_test_accepted(a));
     t->lref[j] = e;
-    CHECK(accepted(a));
+    CHECK(kd_test_accepted(a));
 
     /* records 0 and 1 swapped, with every entry: each entry still names its
      * primitive's record, but record 1 comes first */
@@ -182,14 +158,14 @@ TEST(kd_local_check_refuses_a_stale_copy)
     for (size_t k = 0; k < t->nprims; k++)
         if (t->lref[k] < 2)
             t->lref[k] ^= 1;
-    CHECK(!accepted(a));
+    CHECK(!kd_test_accepted(a));
     r0 = t->loc[0];
     t->loc[0] = t->loc[1];
     t->loc[1] = r0;
     for (size_t k = 0; k < t->nprims; k++)
         if (t->lref[k] < 2)
             t->lref[k] ^= 1;
-    CHECK(accepted(a));
+    CHECK(kd_test_accepted(a));
 
     /* record 1 a second record of record 0's primitive, the lists changed to
      * match (the tree's own check would refuse those lists, so the copy's
@@ -208,14 +184,14 @@ TEST(kd_local_check_refuses_a_stale_copy)
             if (t->lref[k] == 1)
                 t->prims[k] = p1;
         CHECK(kd_local_check(t, s, &err) == BSP_OK);
-        CHECK(accepted(a));
+        CHECK(kd_test_accepted(a));
     }
 
     /* one record fewer than the leaves name */
     t->nloc--;
-    CHECK(!accepted(a));
+    CHECK(!kd_test_accepted(a));
     t->nloc++;
-    CHECK(accepted(a));
+    CHECK(kd_test_accepted(a));
 
     bsp_accel_destroy(a);
     bsp_scene_destroy(s);

@@ -941,7 +941,7 @@ TEST(sah_pluggable_measure)
         REQUIRE(kd_tree_init(t, s, acc[v]->opts.max_depth, acc[v]->opts.max_leaf_prims));
         long calls = 0;
         REQUIRE(kd_build_sah_measure(t, s, &acc[v]->opts, area_twice, &calls, NULL, &err) == BSP_OK);
-        REQUIRE(kd_local_build(t, s));
+        REQUIRE(kd_trace_build(t, s));
         CHECK(calls > 2 * (long)bsp_scene_prim_count(s));
         REQUIRE(bsp_accel_check(acc[v], &err) == BSP_OK);
         bsp_accel_tree_stats(acc[v], &twice);
@@ -1841,7 +1841,7 @@ TEST(check_still_finds_an_unlisted_polygon)
     for (size_t i = 0; i < n; i++) {
         bsp_error err;
         t->prims[leaves[i].entry] = 1;
-        REQUIRE(kd_local_build(t, s)); /* the traversal's copy follows the lists */
+        REQUIRE(kd_trace_build(t, s)); /* the traversal's copy follows the lists */
         bsp_status st = bsp_accel_check(a, &err);
         t->prims[leaves[i].entry] = 0;
         CHECK_MSG((st == BSP_OK) == !leaves[i].needed, "listing %zu (needed %d): %s", i,

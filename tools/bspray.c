@@ -590,8 +590,9 @@ static int cmd_stats(int argc, char **argv)
         printf("  leaf depth     max %d, mean %.2f\n", t.max_leaf_depth, t.avg_leaf_depth);
         printf("  bytes          %" PRIu64 " (nodes and leaf lists)\n", t.bytes);
         if (t.trace_bytes)
-            printf("  trace bytes    %" PRIu64 " (the traversal's copy of the primitives in leaf\n"
-                   "                 order, and the leaf lists in its numbering)\n",
+            printf("  trace bytes    %" PRIu64 " (the traversal's copies: the primitives in leaf\n"
+                   "                 order, the leaf lists in that numbering, the nodes\n"
+                   "                 with empty-child flags)\n",
                    t.trace_bytes);
         printf("  expected cost  %.3f (SAH, traversal and intersection cost 1)\n",
                t.expected_cost);

@@ -201,8 +201,9 @@ typedef struct bsp_tree_stats {
     int max_leaf_depth;
     double avg_leaf_depth;
     uint64_t bytes;       /* nodes + leaf index lists */
-    uint64_t trace_bytes; /* kd-tree: the traversal's copy of the primitives in leaf
-                             order and its leaf lists in that numbering, beside bytes */
+    uint64_t trace_bytes; /* kd-tree: the traversal's copies, beside bytes: the
+                             primitives in leaf order, its leaf lists in that
+                             numbering, and the nodes with empty-child flags */
     double expected_cost; /* SAH cost of the finished tree (traversal 1, intersection 1) */
     double model_cost;    /* the same under the build's cost model: C_trav per interior
                              node, T_i per reference (bsp_build_options.sah_costs resolved:

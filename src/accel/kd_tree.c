@@ -10,6 +10,7 @@
 #include "accel/kd_clip.h"
 #include "accel/kd_cost.h"
 #include "accel/kd_local.h"
+#include "accel/kd_walk.h"
 #include "accel/kd_tree.h"
 #include "accel/kd_view.h"
 #include "geom/vec.h"
@@ -44,6 +45,11 @@ void kd_tree_reset(kd_tree *t)
     t->nodes[0].bits = KD_LEAF_TAG;
 }
 
+int kd_trace_build(kd_tree *t, const bsp_scene *scene)
+{
+    return kd_local_build(t, scene) && kd_walk_build(t);
+}
+
 void kd_tree_free(kd_tree *t)
 {
     if (!t)
@@ -53,6 +59,7 @@ void kd_tree_free(kd_tree *t)
     free(t->saving);
     free(t->lref);
     free(t->loc);
+    free(t->walk);
     memset(t, 0, sizeof *t);
 }
 
@@ -233,7 +240,8 @@ void kd_tree_stats(const kd_tree *t, const bsp_scene *scene, const bsp_sah_costs
     stats_node(&w, 0, t->box, 0);
     st->avg_leaf_depth = st->leaves ? w.depth_sum / (double)st->leaves : 0.0;
     st->bytes = (uint64_t)t->nnodes * sizeof(kd_node) + (uint64_t)t->nprims * sizeof(uint32_t);
-    st->trace_bytes = t->loc ? (uint64_t)t->nloc * sizeof(kd_local) + (uint64_t)t->nprims * sizeof(uint32_t) : 0;
+    st->trace_bytes = (t->loc ? (uint64_t)t->nloc * sizeof(kd_local) + (uint64_t)t->nprims * sizeof(uint32_t) : 0) +
+                      (uint64_t)t->nwalk * sizeof(kd_node);
     /* no primitive: an empty root box, nothing to test (its "area" would be
      * inf - -inf, and the costs nan) */
     double root = box_is_empty(t->box) ? 0.0 : box_area(t->box);
@@ -395,6 +403,8 @@ bsp_status kd_tree_check(const kd_tree *t, const bsp_scene *scene, bsp_error *er
         check_node(&w, 0, t->box, 0, n, 0);
     if (w.st == BSP_OK)
         w.st = kd_local_check(t, scene, err);
+    if (w.st == BSP_OK)
+        w.st = kd_walk_check(t, err);
     kd_clip_scratch_free(&w.clip);
     free(w.pbox);
     free(w.seen);
@@ -515,7 +525,7 @@ bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
         return st;
     }
     t->box_empty = box_is_empty(t->box);
-    if (!kd_local_build(t, a->scene)) {
+    if (!kd_trace_build(t, a->scene)) {
         kd_destroy(t);
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
     }

@@ -98,6 +98,10 @@ typedef struct kd_tree {
     uint32_t *lref;
     struct kd_local *loc;
     uint32_t nloc;
+    /* ... and the nodes again with empty-child flags (kd_walk.h), nwalk of
+     * them; NULL until then. The traversal reads these, the rest nodes. */
+    kd_node *walk;
+    uint32_t nwalk;
     bsp_box box;    /* root cell: the scene bounds grown by pad */
     double pad;     /* bounds padding used for assignment */
     int max_depth;  /* the enforced limit (sizes the traversal stack) */
@@ -116,6 +120,10 @@ typedef struct kd_tree {
     int budget_rebuilt; /* ... and 1 when the estimate proved too high and the tree
                            was built again without it */
 } kd_tree;
+
+/* Makes the traversal's copies of a finished tree over SCENE (kd_local.h,
+ * kd_walk.h), replacing earlier ones; 0 when out of memory. */
+HIDDEN int kd_trace_build(kd_tree *t, const bsp_scene *scene);
 
 /* --- used by builders ------------------------------------------------------ */
 
