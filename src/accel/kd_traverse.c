@@ -240,8 +240,9 @@ static inline double node_split(const char *base, size_t off)
  * - the segment crosses the plane from an empty near child: nothing is
  *   pushed and the far child is entered at the crossing (EN moves there).
  *   The empty leaf is not visited and not counted: it holds nothing to test,
- *   and the stop test of the closest hit is unchanged, as the cells before
- *   the far child are all visited.
+ *   and the closest hit's stop test loses nothing, since no hit lies in an
+ *   empty cell (the invariant of kd_tree.h) and a best hit before it was
+ *   already caught by the stop test of the cell before it.
  * An empty far child is still pushed and visited: skipping it would stretch
  * the near child's segment into it and, in a near subtree, the stretched
  * segment meets cells the ray does not (measured: more tests and steps,

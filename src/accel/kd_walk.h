@@ -38,7 +38,8 @@
 #define KD_WALK_SPARE 1u /* index of the spare empty leaf */
 
 /* Makes T's walk nodes (t->walk, t->nwalk) from its finished tree,
- * replacing any earlier copy; 0 when out of memory. */
+ * replacing any earlier copy; 0 when out of memory, or when T's nodes do not
+ * form a tree (no builder makes one; bsp_accel_check says what is wrong). */
 HIDDEN int kd_walk_build(kd_tree *t);
 
 /* Checks the walk nodes against T's tree: the same tree node for node
