@@ -66,7 +66,8 @@ int kd_walk_build(kd_tree *t)
             walk[wi] = *n;
             continue;
         }
-        if (top + 2 > t->nnodes || next + 2 > nw) { /* not a tree: the checker says so */
+        if (kd_child(n) + 1 >= t->nnodes || top + 2 > t->nnodes || next + 2 > nw) {
+            /* not a tree: the checker says so */
             free(stack);
             free(walk);
             return 0;
@@ -127,16 +128,16 @@ bsp_status kd_walk_check(const kd_tree *t, bsp_error *err)
                            "kd-tree: walk node %u names children %u and %u", wi, c, c + 1);
             continue;
         }
+        if (kd_child(n) + 1 >= t->nnodes || top + 2 > t->nnodes) {
+            st = error_set(err, BSP_ERR_INVALID, NULL, 0, "kd-tree: walk node %u: not a tree", wi);
+            continue;
+        }
         const kd_node *kids = &t->nodes[kd_child(n)];
         unsigned flags = (is_empty_leaf(&kids[0]) ? KD_WALK_LEFT_EMPTY : 0) |
                          (is_empty_leaf(&kids[1]) ? KD_WALK_RIGHT_EMPTY : 0);
         if ((w->bits & (KD_WALK_LEFT_EMPTY | KD_WALK_RIGHT_EMPTY)) != flags) {
             st = error_set(err, BSP_ERR_INVALID, NULL, 0,
                            "kd-tree: walk node %u: wrong empty-child flags", wi);
-            continue;
-        }
-        if (top + 2 > t->nnodes) {
-            st = error_set(err, BSP_ERR_INVALID, NULL, 0, "kd-tree: walk node %u: not a tree", wi);
             continue;
         }
         met[c] = met[c + 1] = 1;
