@@ -47,9 +47,10 @@ typedef struct kd_node {
                       29 bits (bits >> KD_INDEX_SHIFT): interior: index of
                       the left child (right = left + 1); leaf: primitive
                       count. So bits & ~7 of an interior node is the byte
-                      offset of its left child in the node array: the
-                      traversal's next address is one AND away from the
-                      load (kd_traverse.c). */
+                      offset of its left child in the node array. (The
+                      traversal reads kd_walk.h's copy, whose bits 2 and 3
+                      flag empty children: there the offset is bits & ~15,
+                      one AND away from the load.) */
     union {
         float split;    /* interior: the plane's coordinate on `axis` */
         uint32_t first; /* leaf: first entry in kd_tree.prims */
