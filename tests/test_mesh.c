@@ -568,15 +568,31 @@ static void check_same_prims(const bsp_scene *a, const bsp_scene *b, const char 
     CHECK_EQ_INT(bsp_scene_kind_count(a, BSP_PRIM_DROPPED), bsp_scene_kind_count(b, BSP_PRIM_DROPPED));
 }
 
+/* The test mesh as an OBJ file FILE in the test directory, loaded; its text
+ * in *TEXT (free with free()) and *LEN when TEXT is not NULL. */
+static bsp_scene *load_mesh_obj(const char *file, char **text, size_t *len)
+{
+    char path[1024];
+    size_t n;
+    char *obj = mesh_as_obj(&n);
+    snprintf(path, sizeof path, "%s/%s", harness_tmpdir(), file);
+    REQUIRE(write_file(path, obj, n));
+    bsp_scene *s = load_ok(path);
+    if (text) {
+        *text = obj;
+        *len = n;
+    } else {
+        free(obj);
+    }
+    return s;
+}
+
 TEST(mesh_same_mesh_in_every_format_loads_identically)
 {
     char path[1024];
     size_t len;
-    char *text = mesh_as_obj(&len);
-    snprintf(path, sizeof path, "%s/mesh.obj", harness_tmpdir());
-    REQUIRE(write_file(path, text, len));
-    free(text);
-    bsp_scene *ref = load_ok(path);
+    char *text;
+    bsp_scene *ref = load_mesh_obj("mesh.obj", NULL, NULL);
     REQUIRE(bsp_scene_prim_count(ref) == MESH_NF);
     CHECK_EQ_INT(bsp_scene_kind_count(ref, BSP_PRIM_DROPPED), 1);
     CHECK_EQ_INT(bsp_scene_prim_kind(ref, 7), BSP_PRIM_DROPPED);
@@ -672,10 +688,8 @@ TEST(mesh_gzip_input_loads_as_the_plain_file)
 {
     char path[1024];
     size_t len;
-    char *text = mesh_as_obj(&len);
-    snprintf(path, sizeof path, "%s/gz.obj", harness_tmpdir());
-    REQUIRE(write_file(path, text, len));
-    bsp_scene *ref = load_ok(path);
+    char *text;
+    bsp_scene *ref = load_mesh_obj("gz.obj", &text, &len);
     snprintf(path, sizeof path, "%s/gz.OBJ.GZ", harness_tmpdir());
     REQUIRE(write_gzip_file(path, text, len));
     bsp_scene *s = load_ok(path);
