@@ -80,11 +80,17 @@ static void numbering_check(const bsp_scene *s, const bsp_accel *a, const char *
         if (number[p] != UINT32_MAX && number[p] < t->nloc)
             bad += !same_as_scene(s, &t->loc[number[p]], (uint32_t)p);
     CHECK_MSG(bad == 0, "%s: %zu records differ from the scene", spec, bad);
+    /* the inverse numbering of bsp_intersect_from: number + 1, 0 unlisted */
+    REQUIRE(t->local_of && t->nlocal_of == s->nprims);
+    for (size_t p = 0; p < s->nprims; p++)
+        bad += t->local_of[p] != number[p] + 1; /* UINT32_MAX + 1 == 0 */
+    CHECK_MSG(bad == 0, "%s: %zu primitives with another local number", spec, bad);
     CHECK_MSG(kd_test_accepted(a), "%s: the checker refuses the tree", spec);
     bsp_tree_stats st;
     bsp_accel_tree_stats(a, &st);
     CHECK(st.trace_bytes == (uint64_t)t->nloc * sizeof(kd_local) +
                                 (uint64_t)t->nprims * sizeof(uint32_t) +
+                                (uint64_t)s->nprims * sizeof(uint32_t) +
                                 ((uint64_t)t->nnodes + 1) * sizeof(kd_node));
     /* the scenes give the copy the shapes it must cover */
     if (scene == 0)
@@ -139,6 +145,27 @@ TEST(kd_local_check_refuses_a_stale_copy)
     CHECK(!kd_test_accepted(a));
     t->loc[sph] = keep;
     CHECK(kd_test_accepted(a));
+
+    /* a primitive's local number off by one, and a local number for a
+     * primitive no leaf lists (a new one, past the listed ones) */
+    uint32_t lp = t->loc[tri].prim, keep_num = t->local_of[lp];
+    t->local_of[lp] = keep_num + 1;
+    CHECK(!kd_test_accepted(a));
+    t->local_of[lp] = keep_num;
+    CHECK(kd_test_accepted(a));
+    {
+        size_t unlisted = SIZE_MAX;
+        for (size_t p = 0; p < s->nprims && unlisted == SIZE_MAX; p++)
+            if (t->local_of[p] == 0)
+                unlisted = p;
+        if (unlisted != SIZE_MAX) {
+            t->local_of[unlisted] = 1;
+            CHECK(kd_local_check(t, s, &err) != BSP_OK);
+            CHECK_STR_CONTAINS(err.message, "in no leaf");
+            t->local_of[unlisted] = 0;
+            CHECK(kd_test_accepted(a));
+        }
+    }
 
     /* an entry naming another record (the last entry's, where it differs) */
     size_t j = 0;

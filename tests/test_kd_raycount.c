@@ -239,18 +239,21 @@ TEST(raycount_mixed_tree_is_deterministic)
 typedef struct logged {
     bsp_ray *rays;
     int *cls;
+    uint32_t *from;
     size_t n, cap;
 } logged;
 
-static void log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
+static void log_ray(bsp_ray_class cls, const bsp_ray *ray, uint32_t from, void *ctx)
 {
     logged *l = ctx;
     if (l->n == l->cap) {
         l->cap = l->cap ? 2 * l->cap : 1024;
         l->rays = realloc(l->rays, l->cap * sizeof *l->rays);
         l->cls = realloc(l->cls, l->cap * sizeof *l->cls);
+        l->from = realloc(l->from, l->cap * sizeof *l->from);
     }
     l->rays[l->n] = *ray;
+    l->from[l->n] = from;
     l->cls[l->n++] = (int)cls;
 }
 
@@ -298,9 +301,9 @@ TEST(mixed_check_keeps_the_tree_it_measured_cheaper)
             for (size_t i = 0; i < l.n; i++) {
                 bsp_hit h;
                 if (l.cls[i] == BSP_RAY_SHADOW)
-                    bsp_occluded(sah, q, &l.rays[i]);
+                    bsp_occluded_from(sah, q, &l.rays[i], l.from[i]);
                 else
-                    bsp_intersect(sah, q, &l.rays[i], &h);
+                    bsp_intersect_from(sah, q, &l.rays[i], l.from[i], &h);
             }
             const bsp_query_counters *qc = bsp_query_get_counters(q);
             double tsum = 0.0;
@@ -317,6 +320,7 @@ TEST(mixed_check_keeps_the_tree_it_measured_cheaper)
             bsp_query_destroy(q);
             free(l.rays);
             free(l.cls);
+            free(l.from);
             bsp_accel_destroy(checked);
             bsp_accel_destroy(mixed);
             bsp_accel_destroy(sah);

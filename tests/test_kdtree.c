@@ -209,7 +209,7 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
     if (nv > 0)
         collect_planes(acc[nv - 1], &g.planes);
     rng = seed;
-    int bad = 0, hits = 0;
+    int bad = 0, hits = 0, from_checked = 0;
     for (int i = 0; i < nrays && bad < 5; i++) {
         bsp_ray r = make_ray(&g);
         bsp_hit hn, hk;
@@ -238,7 +238,45 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
                              fk ? hk.t : 0, ok);
             }
         }
+        /* every other ray that hits, again with its hit primitive left out
+         * (bsp_intersect_from): the same ray, whose answer must now be the
+         * next primitive along it, and the ray on from the hit point, as a
+         * renderer's secondary ray leaves a surface */
+        if (fn && (i & 1)) {
+            bsp_ray on_ray = r;
+            on_ray.org = ray_at(&r, hn.t);
+            on_ray.tmin = 0.0;
+            on_ray.tmax = INFINITY;
+            const bsp_ray *two[2] = {&r, &on_ray};
+            for (int w = 0; w < 2 && v3_is_finite(on_ray.org); w++) {
+                bsp_hit hf, hkf;
+                int ff = bsp_intersect_from(naive, nq, two[w], hn.prim, &hf);
+                int of = bsp_occluded_from(naive, nq, two[w], hn.prim);
+                from_checked++;
+                if (ff && hf.prim == hn.prim) {
+                    bad++;
+                    harness_fail(__FILE__, __LINE__, "%s: ray %d: naive hit the primitive %u left out",
+                                 name, i, hn.prim);
+                }
+                for (int v = 0; v < nv; v++) {
+                    int fk = bsp_intersect_from(acc[v], qs[v], two[w], hn.prim, &hkf);
+                    int ok = bsp_occluded_from(acc[v], qs[v], two[w], hn.prim);
+                    if (!same_hit(ff, &hf, fk, &hkf) || ok != of) {
+                        bad++;
+                        harness_fail(__FILE__, __LINE__,
+                                     "%s: %s mailbox %d, ray %d (%s) leaving out %u: naive %d prim "
+                                     "%u t %.17g occl %d; kd %d prim %u t %.17g occl %d",
+                                     name, bsp_accel_kind_name(bsp_accel_get_kind(acc[v])), v % 2,
+                                     i, w ? "on from the hit" : "the same", hn.prim, ff,
+                                     ff ? hf.prim : 0, ff ? hf.t : 0, of, fk, fk ? hkf.prim : 0,
+                                     fk ? hkf.t : 0, ok);
+                    }
+                }
+            }
+        }
     }
+    if (hits > 1)
+        CHECK_MSG(from_checked > 0, "%s: no ray checked with a primitive left out", name);
     /* a scene where nothing is hit tests nothing: make sure rays did hit */
     if (bsp_scene_prim_count(scene) > 0)
         CHECK_MSG(hits > nrays / 50, "%s: only %d of %d rays hit", name, hits, nrays);
@@ -947,15 +985,16 @@ static void checked_thread_queries(checked_impl *c)
     }
 }
 
-static int checked_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit)
+static int checked_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
+                             bsp_hit *hit)
 {
     (void)q;
     checked_impl *c = a->impl;
     checked_thread_queries(c);
-    int fn = bsp_intersect(c->naive, tl_q[c->nkd], ray, hit);
+    int fn = bsp_intersect_from(c->naive, tl_q[c->nkd], ray, from, hit);
     for (int v = 0; v < c->nkd; v++) {
         bsp_hit hk;
-        int fk = bsp_intersect(c->kd[v], tl_q[v], ray, &hk);
+        int fk = bsp_intersect_from(c->kd[v], tl_q[v], ray, from, &hk);
         if (!same_hit(fn, hit, fk, &hk))
             __atomic_add_fetch(&c->mismatches[v], 1, __ATOMIC_RELAXED);
     }
@@ -963,14 +1002,14 @@ static int checked_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ra
     return fn;
 }
 
-static int checked_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
+static int checked_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from)
 {
     (void)q;
     checked_impl *c = a->impl;
     checked_thread_queries(c);
-    int on = bsp_occluded(c->naive, tl_q[c->nkd], ray);
+    int on = bsp_occluded_from(c->naive, tl_q[c->nkd], ray, from);
     for (int v = 0; v < c->nkd; v++)
-        if (bsp_occluded(c->kd[v], tl_q[v], ray) != on)
+        if (bsp_occluded_from(c->kd[v], tl_q[v], ray, from) != on)
             __atomic_add_fetch(&c->mismatches[v], 1, __ATOMIC_RELAXED);
     __atomic_add_fetch(&c->rays, 1, __ATOMIC_RELAXED);
     return on;

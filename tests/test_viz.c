@@ -77,8 +77,9 @@ typedef struct ray_check {
     int rays, off_centre;
 } ray_check;
 
-static void log_primary(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
+static void log_primary(bsp_ray_class cls, const bsp_ray *ray, uint32_t from, void *ctx)
 {
+    (void)from;
     ray_check *rc = ctx;
     if (cls != BSP_RAY_PRIMARY)
         return;

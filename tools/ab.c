@@ -55,15 +55,16 @@ typedef struct answer {
     double t;
 } answer;
 
-static answer shoot(const bsp_accel *accel, bsp_query *q, const bsp_ray *ray, int shadow)
+static answer shoot(const bsp_accel *accel, bsp_query *q, const bsp_ray *ray, uint32_t origin,
+                    int shadow)
 {
     answer a = {0, BSP_NO_PRIM, 0.0};
     if (shadow) {
-        a.hit = bsp_occluded(accel, q, ray);
+        a.hit = bsp_occluded_from(accel, q, ray, origin);
         return a;
     }
     bsp_hit h;
-    a.hit = bsp_intersect(accel, q, ray, &h);
+    a.hit = bsp_intersect_from(accel, q, ray, origin, &h);
     if (a.hit) {
         a.prim = h.prim;
         a.t = h.t;
@@ -73,12 +74,12 @@ static answer shoot(const bsp_accel *accel, bsp_query *q, const bsp_ray *ray, in
 
 /* CPU seconds of shooting RAYS[from..to) through ACCEL (SHADOW: as
  * occlusion queries). The calls update the query's counters, so they stay. */
-static double slice_seconds(const bsp_accel *accel, bsp_query *q, const bsp_ray *rays,
+static double slice_seconds(const bsp_accel *accel, bsp_query *q, const bench_ray_set *set,
                             size_t from, size_t to, int shadow)
 {
     double t0 = bench_cpu_seconds();
     for (size_t i = from; i < to; i++)
-        (void)shoot(accel, q, &rays[i], shadow);
+        (void)shoot(accel, q, &set->rays[i], set->from[i], shadow);
     return bench_cpu_seconds() - t0;
 }
 
@@ -173,7 +174,8 @@ int cmd_ab(int argc, char **argv)
         for (size_t i = 0; i < sets[c].n; i++) {
             const bsp_ray *r = &sets[c].rays[i];
             int shadow = c == BSP_RAY_SHADOW;
-            answer x = shoot(A, qa, r, shadow), y = shoot(B, qb, r, shadow);
+            uint32_t o = sets[c].from[i];
+            answer x = shoot(A, qa, r, o, shadow), y = shoot(B, qb, r, o, shadow);
             differ += x.hit != y.hit || x.prim != y.prim || x.t != y.t;
         }
     }
@@ -183,7 +185,7 @@ int cmd_ab(int argc, char **argv)
         double ta = 0.0, tb = 0.0;
         size_t k = 0; /* slices so far: the order alternates with each */
         for (int c = 0; c < nclasses; c++) {
-            const bsp_ray *rays = sets[c].rays;
+            const bench_ray_set *rays = &sets[c];
             size_t n = sets[c].n;
             int shadow = c == BSP_RAY_SHADOW;
             for (size_t from = 0; from < n; from += (size_t)slice, k++) {

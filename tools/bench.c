@@ -115,11 +115,13 @@ void bench_free_ray_sets(bench_ray_set sets[BSP_RAY_CLASS_COUNT])
 {
     for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
         free(sets[c].rays);
+        free(sets[c].from);
         sets[c].rays = NULL;
+        sets[c].from = NULL;
     }
 }
 
-void bench_log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
+void bench_log_ray(bsp_ray_class cls, const bsp_ray *ray, uint32_t from, void *ctx)
 {
     bench_ray_set *set = &((bench_ray_set *)ctx)[cls];
     if (set->failed)
@@ -127,13 +129,18 @@ void bench_log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
     if (set->n == set->cap) {
         size_t ncap = set->cap ? set->cap * 2 : 1 << 16;
         bsp_ray *nr = realloc(set->rays, ncap * sizeof *nr);
-        if (!nr) {
+        if (nr)
+            set->rays = nr;
+        uint32_t *nf = nr ? realloc(set->from, ncap * sizeof *nf) : NULL;
+        if (nf)
+            set->from = nf;
+        if (!nr || !nf) {
             set->failed = 1;
             return;
         }
-        set->rays = nr;
         set->cap = ncap;
     }
+    set->from[set->n] = from;
     set->rays[set->n++] = *ray;
 }
 
@@ -149,6 +156,7 @@ double bench_cpu_seconds(void)
 typedef struct shoot_job {
     const bsp_accel *accel;
     const bsp_ray *rays;
+    const uint32_t *from;
     size_t begin, end;
     int any;
     uint64_t hits;
@@ -166,8 +174,8 @@ static void *shoot_main(void *arg)
     uint64_t hits = 0;
     bsp_hit h;
     for (size_t i = j->begin; i < j->end; i++)
-        hits += j->any ? (uint64_t)bsp_occluded(j->accel, q, &j->rays[i])
-                       : (uint64_t)bsp_intersect(j->accel, q, &j->rays[i], &h);
+        hits += j->any ? (uint64_t)bsp_occluded_from(j->accel, q, &j->rays[i], j->from[i])
+                       : (uint64_t)bsp_intersect_from(j->accel, q, &j->rays[i], j->from[i], &h);
     j->hits = hits;
     bsp_query_destroy(q);
     return NULL;
@@ -186,7 +194,7 @@ static double shoot_rate(const bsp_accel *accel, const bench_ray_set *set, int a
     if (threads > 256)
         threads = 256;
     for (int t = 0; t < threads; t++) {
-        jobs[t] = (shoot_job){accel, set->rays, set->n * (size_t)t / (size_t)threads,
+        jobs[t] = (shoot_job){accel, set->rays, set->from, set->n * (size_t)t / (size_t)threads,
                               set->n * (size_t)(t + 1) / (size_t)threads, any, 0, 0};
     }
     /* one thread: its CPU time, steadier than the wall clock on a shared

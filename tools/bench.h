@@ -21,10 +21,11 @@ long bench_validate(const bsp_accel *accel, const bsp_accel *naive, const bsp_sc
  * context; FAILED when out of memory (the set is then incomplete). */
 typedef struct bench_ray_set {
     bsp_ray *rays;
+    uint32_t *from; /* the primitive each ray's query leaves out (bsp_intersect_from) */
     size_t n, cap;
     int failed;
 } bench_ray_set;
-void bench_log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx);
+void bench_log_ray(bsp_ray_class cls, const bsp_ray *ray, uint32_t from, void *ctx);
 void bench_free_ray_sets(bench_ray_set sets[BSP_RAY_CLASS_COUNT]);
 
 /* The CPU time of the calling thread, in seconds. */

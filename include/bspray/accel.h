@@ -252,7 +252,9 @@ typedef struct bsp_query_counters {
     uint64_t traversal_steps; /* nodes visited (N_TS numerator) */
     uint64_t leaves_visited;  /* N_ETS numerator */
     uint64_t empty_leaves;    /* N_EETS numerator */
-    uint64_t mailbox_hits;    /* tests skipped by the mailbox */
+    uint64_t mailbox_hits;    /* leaf entries not tested: tested before with the same ray
+                                 (mailbox), or the ray's origin primitive
+                                 (bsp_intersect_from) */
 } bsp_query_counters;
 
 /* Per-thread query state for ACCEL (borrowed). NULL when out of memory. */
@@ -279,5 +281,19 @@ int bsp_intersect(const bsp_accel *accel, bsp_query *query, const bsp_ray *ray, 
 
 /* Any hit on RAY within [tmin, tmax]: 1 when something blocks the segment. */
 int bsp_occluded(const bsp_accel *accel, bsp_query *query, const bsp_ray *ray);
+
+/* The same queries for a ray that leaves the surface of primitive FROM:
+ * FROM is left out, never tested (BSP_NO_PRIM, or an index of no primitive:
+ * nothing is left out). Every method leaves it out alike, so the answers
+ * are still the naive method's for the same FROM. Meant for rays that start
+ * on FROM and cannot meet it again: a ray leaving a planar primitive (a
+ * triangle, polygon or patch), or leaving a sphere or cone on the outer side
+ * of its surface. For those it spares the test (one per shadow or secondary
+ * ray: a fifth of lattice's tests) and a self-hit that rounding could
+ * report. The renderer casts its shadow and secondary rays this way. */
+int bsp_intersect_from(const bsp_accel *accel, bsp_query *query, const bsp_ray *ray,
+                       uint32_t from, bsp_hit *hit);
+int bsp_occluded_from(const bsp_accel *accel, bsp_query *query, const bsp_ray *ray,
+                      uint32_t from);
 
 #endif /* BSPRAY_ACCEL_H */

@@ -101,9 +101,12 @@ typedef struct bsp_render_options {
     void (*progress)(double done, void *ctx);
     void *progress_ctx;
     /* Called for every ray cast, with its class, before it is shot; may be
-     * NULL. Called from the render threads at once: with threads > 1 it must
-     * be thread-safe. (bench records a render's rays this way.) */
-    void (*ray_log)(bsp_ray_class cls, const bsp_ray *ray, void *ctx);
+     * NULL. FROM: the primitive its query leaves out (bsp_intersect_from:
+     * the one a shadow or secondary ray leaves, when it cannot meet it
+     * again), or BSP_NO_PRIM. Called from the render threads at once: with
+     * threads > 1 it must be thread-safe. (bench records a render's rays
+     * this way.) */
+    void (*ray_log)(bsp_ray_class cls, const bsp_ray *ray, uint32_t from, void *ctx);
     void *ray_log_ctx;
 } bsp_render_options;
 

@@ -190,11 +190,24 @@ void bsp_query_reset_counters(bsp_query *q)
 int bsp_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit)
 {
     q->counters.rays++;
-    return a->ops->intersect(a, q, ray, hit);
+    return a->ops->intersect(a, q, ray, BSP_NO_PRIM, hit);
 }
 
 int bsp_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
 {
     q->counters.rays++;
-    return a->ops->occluded(a, q, ray);
+    return a->ops->occluded(a, q, ray, BSP_NO_PRIM);
+}
+
+int bsp_intersect_from(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
+                       bsp_hit *hit)
+{
+    q->counters.rays++;
+    return a->ops->intersect(a, q, ray, from, hit);
+}
+
+int bsp_occluded_from(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from)
+{
+    q->counters.rays++;
+    return a->ops->occluded(a, q, ray, from);
 }

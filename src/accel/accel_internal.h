@@ -9,8 +9,10 @@
 #include "scene/scene_internal.h"
 
 typedef struct accel_ops {
-    int (*intersect)(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit);
-    int (*occluded)(const bsp_accel *a, bsp_query *q, const bsp_ray *ray);
+    /* FROM: the primitive left out (bsp_intersect_from), or BSP_NO_PRIM */
+    int (*intersect)(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
+                     bsp_hit *hit);
+    int (*occluded)(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from);
     void (*destroy)(void *impl);
 } accel_ops;
 
@@ -39,8 +41,9 @@ HIDDEN bsp_status naive_build(bsp_accel *a, bsp_error *err);
 /* The naive method's queries on SCENE: the reference answers, also taken by
  * the kd traversal for rays outside its precision domain (kd_traverse.c). */
 HIDDEN int naive_scene_intersect(const bsp_scene *s, bsp_query *q, const bsp_ray *ray,
-                                 bsp_hit *hit);
-HIDDEN int naive_scene_occluded(const bsp_scene *s, bsp_query *q, const bsp_ray *ray);
+                                 uint32_t from, bsp_hit *hit);
+HIDDEN int naive_scene_occluded(const bsp_scene *s, bsp_query *q, const bsp_ray *ray,
+                                uint32_t from);
 
 /* Seconds on a monotonic clock. */
 HIDDEN double accel_now(void);

@@ -37,11 +37,14 @@ int kd_local_build(kd_tree *t, const bsp_scene *scene)
 {
     free(t->lref);
     free(t->loc);
+    free(t->local_of);
     t->lref = NULL;
     t->loc = NULL;
+    t->local_of = NULL;
     t->nloc = 0;
+    t->nlocal_of = 0;
     size_t np = scene->nprims;
-    /* number[p]: p's local number + 1, 0 while unlisted. Every listed
+    /* number[p]: p's local number + 1, 0 while unlisted (kept: local_of). Every listed
      * primitive is live, so at most np records; the ones filled are written
      * in order, and the pages of the rest are never touched. */
     uint32_t *number = calloc(np ? np : 1, sizeof *number);
@@ -68,10 +71,11 @@ int kd_local_build(kd_tree *t, const bsp_scene *scene)
             lref[j] = number[p] - 1;
         }
     }
-    free(number);
     t->lref = lref;
     t->loc = loc;
     t->nloc = nloc;
+    t->local_of = number;
+    t->nlocal_of = np;
     return 1;
 }
 
@@ -111,6 +115,9 @@ bsp_status kd_local_check(const kd_tree *t, const bsp_scene *scene, bsp_error *e
 {
     if (!t->lref || !t->loc)
         return error_set(err, BSP_ERR_INVALID, NULL, 0, "kd-tree: no local copy of the primitives");
+    if (!t->local_of || t->nlocal_of != scene->nprims)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                         "kd-tree: no local number for each of the %zu primitives", scene->nprims);
     if (t->nloc > scene->nprims)
         return error_set(err, BSP_ERR_INVALID, NULL, 0, "kd-tree: %u local records for %zu primitives",
                          t->nloc, scene->nprims);
@@ -158,9 +165,18 @@ bsp_status kd_local_check(const kd_tree *t, const bsp_scene *scene, bsp_error *e
         else if (!local_matches(&t->loc[l], scene))
             st = error_set(err, BSP_ERR_INVALID, NULL, 0,
                            "kd-tree: local record %u differs from primitive %u's data", l, p);
+        else if (t->local_of[p] != l + 1)
+            st = error_set(err, BSP_ERR_INVALID, NULL, 0,
+                           "kd-tree: primitive %u's local number is not its record's, %u", p, l);
         else
             seen[p] = 1;
     }
+    /* and a primitive no leaf lists has no local number */
+    for (size_t p = 0; p < scene->nprims && st == BSP_OK; p++)
+        if (!seen[p] && t->local_of[p] != 0)
+            st = error_set(err, BSP_ERR_INVALID, NULL, 0,
+                           "kd-tree: primitive %zu is in no leaf but has local number %u", p,
+                           t->local_of[p] - 1);
     free(seen);
     return st;
 }

@@ -33,8 +33,8 @@
 
 /* The cost per ray of shooting RAYS[0..N) (classes CLS) through A. -1 when
  * out of memory. */
-static double rays_cost(const bsp_accel *a, const bsp_ray *rays, const uint8_t *cls, size_t n,
-                        const kd_cost_model *cm, double t_mean)
+static double rays_cost(const bsp_accel *a, const bsp_ray *rays, const uint8_t *cls,
+                        const uint32_t *from, size_t n, const kd_cost_model *cm, double t_mean)
 {
     bsp_query *q = bsp_query_create(a);
     if (!q)
@@ -42,9 +42,9 @@ static double rays_cost(const bsp_accel *a, const bsp_ray *rays, const uint8_t *
     for (size_t i = 0; i < n; i++) {
         bsp_hit h;
         if (cls[i] == BSP_RAY_SHADOW)
-            (void)bsp_occluded(a, q, &rays[i]);
+            (void)bsp_occluded_from(a, q, &rays[i], from[i]);
         else
-            (void)bsp_intersect(a, q, &rays[i], &h);
+            (void)bsp_intersect_from(a, q, &rays[i], from[i], &h);
     }
     const bsp_query_counters *c = bsp_query_get_counters(q);
     double cost = cm->c.traversal * (double)c->traversal_steps + t_mean * (double)c->isect_tests;
@@ -78,14 +78,15 @@ bsp_status kd_mixed_check(bsp_accel *a, bsp_error *err)
     bsp_camera cam = kd_prepass_camera(a->scene, &a->opts, CHECK_RES);
     bsp_ray *rays = NULL;
     uint8_t *cls = NULL;
+    uint32_t *from = NULL;
     size_t n = 0;
-    st = kd_render_rays(s, &cam, 0, &rays, &cls, &n, err);
+    st = kd_render_rays(s, &cam, 0, &rays, &cls, &from, &n, err);
     if (st == BSP_OK) {
         kd_cost_model cm;
         kd_cost_resolve(&a->opts, &cm);
         double t_mean = mean_prim_cost(a->scene, &cm);
-        double cm_mixed = rays_cost(a, rays, cls, n, &cm, t_mean);
-        double cm_sah = rays_cost(s, rays, cls, n, &cm, t_mean);
+        double cm_mixed = rays_cost(a, rays, cls, from, n, &cm, t_mean);
+        double cm_sah = rays_cost(s, rays, cls, from, n, &cm, t_mean);
         if (cm_mixed < 0.0 || cm_sah < 0.0) {
             st = error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
         } else {
@@ -103,6 +104,7 @@ bsp_status kd_mixed_check(bsp_accel *a, bsp_error *err)
     }
     free(rays);
     free(cls);
+    free(from);
     bsp_accel_destroy(s);
     return st;
 }

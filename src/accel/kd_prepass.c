@@ -37,13 +37,14 @@ bsp_camera kd_prepass_camera(const bsp_scene *scene, const bsp_build_options *o,
 
 typedef struct ray_log {
     uint64_t count[BSP_RAY_CLASS_COUNT];
-    bsp_ray *rays; /* the rays kept */
-    uint8_t *cls;  /* their classes, when kept too */
+    bsp_ray *rays;  /* the rays kept */
+    uint32_t *from; /* the primitive each one's query leaves out */
+    uint8_t *cls;   /* their classes, when kept too */
     size_t n, cap;
     int keep, keep_primary, nomem;
 } ray_log;
 
-static void log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
+static void log_ray(bsp_ray_class cls, const bsp_ray *ray, uint32_t from, void *ctx)
 {
     ray_log *l = ctx;
     if ((unsigned)cls < BSP_RAY_CLASS_COUNT)
@@ -55,10 +56,13 @@ static void log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
         bsp_ray *nr = realloc(l->rays, ncap * sizeof *nr);
         if (nr)
             l->rays = nr;
-        uint8_t *nc = nr && l->keep_primary ? realloc(l->cls, ncap) : NULL;
+        uint32_t *nf = nr ? realloc(l->from, ncap * sizeof *nf) : NULL;
+        if (nf)
+            l->from = nf;
+        uint8_t *nc = nf && l->keep_primary ? realloc(l->cls, ncap) : NULL;
         if (nc)
             l->cls = nc;
-        if (!nr || (l->keep_primary && !nc)) {
+        if (!nr || !nf || (l->keep_primary && !nc)) {
             l->nomem = 1;
             return;
         }
@@ -66,6 +70,7 @@ static void log_ray(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
     }
     if (l->keep_primary)
         l->cls[l->n] = (uint8_t)cls;
+    l->from[l->n] = from;
     l->rays[l->n++] = *ray;
 }
 
@@ -91,7 +96,8 @@ static bsp_status render_logged(const bsp_accel *a, const bsp_camera *cam, int m
 }
 
 bsp_status kd_render_rays(const bsp_accel *accel, const bsp_camera *cam, int max_depth,
-                          bsp_ray **rays, uint8_t **cls, size_t *n, bsp_error *err)
+                          bsp_ray **rays, uint8_t **cls, uint32_t **from, size_t *n,
+                          bsp_error *err)
 {
     ray_log log;
     memset(&log, 0, sizeof log);
@@ -100,10 +106,12 @@ bsp_status kd_render_rays(const bsp_accel *accel, const bsp_camera *cam, int max
     if (st != BSP_OK) {
         free(log.rays);
         free(log.cls);
+        free(log.from);
         return st;
     }
     *rays = log.rays;
     *cls = log.cls;
+    *from = log.from;
     *n = log.n;
     return BSP_OK;
 }
@@ -143,13 +151,14 @@ bsp_status kd_mixed_prepass(const bsp_scene *scene, const bsp_camera *cam, int m
             for (size_t i = 0; i < log.n; i++) {
                 const bsp_ray *r = &log.rays[i];
                 bsp_hit h;
-                double end = bsp_intersect(a, q, r, &h) ? h.t : r->tmax;
+                double end = bsp_intersect_from(a, q, r, log.from[i], &h) ? h.t : r->tmax;
                 out[i] = (kd_flux_segment){r->org, r->dir, r->tmin, end};
             }
             bsp_query_destroy(q);
         }
     }
     free(log.rays);
+    free(log.from);
     bsp_accel_destroy(a);
     if (st != BSP_OK) {
         free(out);

@@ -14,9 +14,11 @@ HIDDEN bsp_camera kd_prepass_camera(const bsp_scene *scene, const bsp_build_opti
 
 /* Every ray a one-thread Whitted render through ACCEL with camera CAM and
  * ray depth MAX_DEPTH (0: 4) shoots, in a new array *RAYS (free()) of *N,
- * with its class in *CLS (free()). */
+ * with its class in *CLS and the primitive its query leaves out in *FROM
+ * (bsp_intersect_from; both free()). */
 HIDDEN bsp_status kd_render_rays(const bsp_accel *accel, const bsp_camera *cam, int max_depth,
-                                 bsp_ray **rays, uint8_t **cls, size_t *n, bsp_error *err);
+                                 bsp_ray **rays, uint8_t **cls, uint32_t **from, size_t *n,
+                                 bsp_error *err);
 
 /* Renders SCENE through CAM (NULL: the scene's; its resolution + 1 rays
  * across) with ray depth MAX_DEPTH (0: 4) on a `sah` tree built on

@@ -344,7 +344,18 @@ static inline void count(bsp_query *q, uint64_t interior, uint64_t leaves, uint6
     q->counters.mailbox_hits += refs - tests;
 }
 
-int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit)
+/* The local number of primitive FROM, which a query leaves out
+ * (bsp_intersect_from), or UINT32_MAX: no leaf lists it, or FROM names no
+ * primitive. With the mailbox its stamp is set before the first leaf, so it
+ * costs the leaf loop nothing (its entries count as mailbox hits);
+ * without, the loop compares each entry with it. */
+static inline uint32_t left_out(const kd_tree *t, uint32_t from)
+{
+    return from < t->nlocal_of ? t->local_of[from] - 1 : UINT32_MAX;
+}
+
+int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
+                 bsp_hit *hit)
 {
     const kd_tree *t = a->impl;
     const bsp_scene *s = a->scene;
@@ -354,11 +365,14 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
     hit->prim = BSP_NO_PRIM;
     trav_ray_init(&tr, ray);
     if (__builtin_expect(!in_domain(s, &tr), 0))
-        return naive_scene_intersect(s, q, ray, hit);
+        return naive_scene_intersect(s, q, ray, from, hit);
     if (!start(t, ray, &tr, en, stack))
         return 0;
     uint32_t stamp = mailbox_next(q, s->nprims);
     uint32_t *mbox = q->stamp;
+    const uint32_t skip = left_out(t, from);
+    if (mbox && skip != UINT32_MAX)
+        mbox[skip] = stamp;
     /* tmax follows the best hit; t never depends on it. Every hit found is at
      * most tmax, so a hit is better than the best so far when its t is
      * smaller or, at equal t, its index is lower. */
@@ -388,6 +402,8 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
                     if (mbox[l] == stamp)
                         continue;
                     mbox[l] = stamp;
+                } else if (l == skip) {
+                    continue;
                 }
                 tests++;
                 if (kd_local_isect(s, &loc[l], &r, tmax, &h)) {
@@ -411,7 +427,7 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *
     return 1;
 }
 
-int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
+int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from)
 {
     const kd_tree *t = a->impl;
     const bsp_scene *s = a->scene;
@@ -420,11 +436,14 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
     trav_ray tr;
     trav_ray_init(&tr, ray);
     if (__builtin_expect(!in_domain(s, &tr), 0))
-        return naive_scene_occluded(s, q, ray);
+        return naive_scene_occluded(s, q, ray, from);
     if (!start(t, ray, &tr, en, stack))
         return 0;
     uint32_t stamp = mailbox_next(q, s->nprims);
     uint32_t *mbox = q->stamp;
+    const uint32_t skip = left_out(t, from);
+    if (mbox && skip != UINT32_MAX)
+        mbox[skip] = stamp;
     isect_ray r;
     isect_ray_init(&r, ray, s->hit_tol); /* in the domain: checked */
     const double tmax = ray->tmax;
@@ -451,6 +470,8 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
                     if (mbox[l] == stamp)
                         continue;
                     mbox[l] = stamp;
+                } else if (l == skip) {
+                    continue;
                 }
                 tests++;
                 if (kd_local_isect(s, &loc[l], &r, tmax, &h)) {

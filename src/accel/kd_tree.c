@@ -59,6 +59,7 @@ void kd_tree_free(kd_tree *t)
     free(t->saving);
     free(t->lref);
     free(t->loc);
+    free(t->local_of);
     free(t->walk);
     memset(t, 0, sizeof *t);
 }
@@ -241,6 +242,7 @@ void kd_tree_stats(const kd_tree *t, const bsp_scene *scene, const bsp_sah_costs
     st->avg_leaf_depth = st->leaves ? w.depth_sum / (double)st->leaves : 0.0;
     st->bytes = (uint64_t)t->nnodes * sizeof(kd_node) + (uint64_t)t->nprims * sizeof(uint32_t);
     st->trace_bytes = (t->loc ? (uint64_t)t->nloc * sizeof(kd_local) + (uint64_t)t->nprims * sizeof(uint32_t) : 0) +
+                      (t->local_of ? (uint64_t)t->nlocal_of * sizeof(uint32_t) : 0) +
                       (uint64_t)t->nwalk * sizeof(kd_node);
     /* no primitive: an empty root box, nothing to test (its "area" would be
      * inf - -inf, and the costs nan) */

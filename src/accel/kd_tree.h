@@ -99,6 +99,11 @@ typedef struct kd_tree {
     uint32_t *lref;
     struct kd_local *loc;
     uint32_t nloc;
+    /* local_of[p]: primitive p's local number + 1, 0 when no leaf lists p
+     * (the scene's nprims entries): how a query finds the record of the
+     * primitive it leaves out (bsp_intersect_from). */
+    uint32_t *local_of;
+    size_t nlocal_of;
     /* ... and the nodes again with empty-child flags (kd_walk.h), nwalk of
      * them; NULL until then. The traversal reads these, the rest nodes. */
     kd_node *walk;
@@ -177,8 +182,9 @@ HIDDEN void kd_sah_default_limits(bsp_build_options *o, const bsp_scene *scene);
 /* --- used by the accel front end --------------------------------------------- */
 
 HIDDEN bsp_status kd_accel_build(bsp_accel *a, bsp_error *err);
-HIDDEN int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit);
-HIDDEN int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray);
+HIDDEN int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
+                        bsp_hit *hit);
+HIDDEN int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from);
 /* The figures of T; the model cost under COSTS (every field > 0) with
  * SCENE's primitives. */
 HIDDEN void kd_tree_stats(const kd_tree *t, const bsp_scene *scene, const bsp_sah_costs *costs,

@@ -3,13 +3,15 @@
  * index order. It is what every other method is checked against.
  *
  * Ties: a primitive replaces the current closest hit only when its t is
- * strictly smaller, so at equal t the lowest index wins.
+ * strictly smaller, so at equal t the lowest index wins. FROM (the ray's
+ * origin primitive, bsp_intersect_from) is skipped and not counted as a test.
  */
 #include <math.h>
 
 #include "accel/accel_internal.h"
 
-int naive_scene_intersect(const bsp_scene *s, bsp_query *q, const bsp_ray *ray, bsp_hit *hit)
+int naive_scene_intersect(const bsp_scene *s, bsp_query *q, const bsp_ray *ray, uint32_t from,
+                          bsp_hit *hit)
 {
     isect_ray r;
     scene_isect_ray_init(s, &r, ray);
@@ -19,7 +21,7 @@ int naive_scene_intersect(const bsp_scene *s, bsp_query *q, const bsp_ray *ray, 
     hit->prim = BSP_NO_PRIM;
     uint64_t tests = 0;
     for (uint32_t i = 0; i < (uint32_t)s->nprims; i++) {
-        if (s->prims[i].shape == SHAPE_NONE)
+        if (s->prims[i].shape == SHAPE_NONE || i == from)
             continue;
         tests++;
         if (scene_isect(s, i, &r, tmax, &h) && (best_p == BSP_NO_PRIM || h.t < best.t)) {
@@ -35,13 +37,13 @@ int naive_scene_intersect(const bsp_scene *s, bsp_query *q, const bsp_ray *ray, 
     return 1;
 }
 
-int naive_scene_occluded(const bsp_scene *s, bsp_query *q, const bsp_ray *ray)
+int naive_scene_occluded(const bsp_scene *s, bsp_query *q, const bsp_ray *ray, uint32_t from)
 {
     isect_ray r;
     scene_isect_ray_init(s, &r, ray);
     scene_isect_hit h;
     for (uint32_t i = 0; i < (uint32_t)s->nprims; i++) {
-        if (s->prims[i].shape == SHAPE_NONE)
+        if (s->prims[i].shape == SHAPE_NONE || i == from)
             continue;
         q->counters.isect_tests++;
         if (scene_isect(s, i, &r, ray->tmax, &h))
@@ -50,14 +52,15 @@ int naive_scene_occluded(const bsp_scene *s, bsp_query *q, const bsp_ray *ray)
     return 0;
 }
 
-static int naive_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, bsp_hit *hit)
+static int naive_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
+                           bsp_hit *hit)
 {
-    return naive_scene_intersect(a->scene, q, ray, hit);
+    return naive_scene_intersect(a->scene, q, ray, from, hit);
 }
 
-static int naive_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray)
+static int naive_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from)
 {
-    return naive_scene_occluded(a->scene, q, ray);
+    return naive_scene_occluded(a->scene, q, ray, from);
 }
 
 static const accel_ops naive_ops = {naive_intersect, naive_occluded, NULL};

@@ -24,7 +24,9 @@
  *
  * Epsilon policy: secondary and shadow rays start exactly at the hit point
  * with tmin = RAY_EPS_REL * (scene scale), directions of unit length; shadow
- * rays end RAY_EPS_REL * scale before the light (docs/precision.md).
+ * rays end RAY_EPS_REL * scale before the light (docs/precision.md). A ray
+ * that cannot meet the primitive it leaves again is cast without it
+ * (bsp_intersect_from, origin_prim below).
  *
  * Threads take rows from a shared counter; every pixel depends only on its
  * own rays, so the image is identical for any thread count. Counters live in
@@ -82,7 +84,39 @@ static void account(worker *w, bsp_ray_class cls, const bsp_query_counters *befo
     c->mailbox_hits += now->mailbox_hits - before->mailbox_hits;
 }
 
-static int shadowed(worker *w, bsp_vec3 p, bsp_vec3 light)
+/* The primitive to leave out of the query of a ray from a point of PRIM in
+ * direction D (bsp_intersect_from), or BSP_NO_PRIM. A ray that starts on a
+ * planar primitive (a triangle, or a polygon, whose hits lie on its mean
+ * plane) and leaves its plane cannot meet it again; nor can a ray that leaves
+ * a sphere or cone through the outer side of its surface, both solids being
+ * convex (FRONT: the primitive's normal at the point, by
+ * bsp_scene_hit_normals: outward, or inward for an NFF negative radius; a
+ * cone's apex, where that normal falls back to the axis, is left to the
+ * test). A ray into a sphere or cone keeps it: it meets the far side. */
+static uint32_t origin_prim(const bsp_scene *s, uint32_t prim, bsp_vec3 front, bsp_vec3 d)
+{
+    const prim_record *r = &s->prims[prim];
+    double dn = v3_dot(front, d);
+    switch ((shape_kind)r->shape) {
+    case SHAPE_TRIANGLE:
+    case SHAPE_POLYGON:
+        return dn != 0.0 ? prim : BSP_NO_PRIM;
+    case SHAPE_SPHERE:
+        return (s->spheres[r->slot].inside_only ? dn < 0.0 : dn > 0.0) ? prim : BSP_NO_PRIM;
+    case SHAPE_CONE: {
+        const cone_shape *c = &s->cones[r->slot];
+        bsp_vec3 ax = c->inside_only ? v3_neg(c->axis) : c->axis;
+        int at_apex = front.x == ax.x && front.y == ax.y && front.z == ax.z;
+        return (c->inside_only ? dn < 0.0 : dn > 0.0) && !at_apex ? prim : BSP_NO_PRIM;
+    }
+    default:
+        return BSP_NO_PRIM;
+    }
+}
+
+/* Whether the segment from P (on primitive FROM, BSP_NO_PRIM: on none) to
+ * LIGHT is blocked. */
+static int shadowed(worker *w, bsp_vec3 p, uint32_t from, bsp_vec3 light)
 {
     bsp_vec3 to = v3_sub(light, p);
     double dist = v3_length(to);
@@ -94,16 +128,17 @@ static int shadowed(worker *w, bsp_vec3 p, bsp_vec3 light)
     if (!(r.tmax > r.tmin))
         return 0; /* the light sits on the surface */
     if (w->job->opts->ray_log)
-        w->job->opts->ray_log(BSP_RAY_SHADOW, &r, w->job->opts->ray_log_ctx);
+        w->job->opts->ray_log(BSP_RAY_SHADOW, &r, from, w->job->opts->ray_log_ctx);
     bsp_query_counters before = w->query->counters;
-    int blocked = bsp_occluded(w->job->accel, w->query, &r);
+    int blocked = bsp_occluded_from(w->job->accel, w->query, &r, from);
     account(w, BSP_RAY_SHADOW, &before);
     w->stats.cls[BSP_RAY_SHADOW].rays++;
     w->stats.cls[BSP_RAY_SHADOW].hits += (uint64_t)blocked;
     return blocked;
 }
 
-static void trace(worker *w, const bsp_ray *ray, int depth, bsp_ray_class cls, double out[3]);
+static void trace(worker *w, const bsp_ray *ray, uint32_t from, int depth, bsp_ray_class cls,
+                  double out[3]);
 
 static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, double out[3])
 {
@@ -135,7 +170,7 @@ static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, 
         bsp_vec3 L = v3_sub(light->pos, p);
         if (v3_dot(front, L) <= 0.0)
             continue; /* light behind the surface's front: no shadow ray (SPD rule) */
-        if (shadowed(w, p, light->pos))
+        if (shadowed(w, p, origin_prim(s, hit->prim, front, L), light->pos))
             continue;
         L = v3_normalize(L);
         double diff = v3_dot(ns, L);
@@ -163,7 +198,7 @@ static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, 
         r.tmax = INFINITY;
         double c[3];
         w->stats.reflected_rays++;
-        trace(w, &r, depth + 1, BSP_RAY_SECONDARY, c);
+        trace(w, &r, origin_prim(s, hit->prim, front, r.dir), depth + 1, BSP_RAY_SECONDARY, c);
         for (int k = 0; k < 3; k++)
             out[k] += m->ks * c[k];
     }
@@ -178,20 +213,23 @@ static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, 
             r.tmax = INFINITY;
             double c[3];
             w->stats.refracted_rays++;
-            trace(w, &r, depth + 1, BSP_RAY_SECONDARY, c);
+            trace(w, &r, origin_prim(s, hit->prim, front, r.dir), depth + 1, BSP_RAY_SECONDARY,
+                  c);
             for (int q = 0; q < 3; q++)
                 out[q] += m->t * c[q];
         }
     }
 }
 
-static void trace(worker *w, const bsp_ray *ray, int depth, bsp_ray_class cls, double out[3])
+/* Traces RAY (leaving primitive FROM, BSP_NO_PRIM: none) into OUT. */
+static void trace(worker *w, const bsp_ray *ray, uint32_t from, int depth, bsp_ray_class cls,
+                  double out[3])
 {
     bsp_hit hit;
     if (w->job->opts->ray_log)
-        w->job->opts->ray_log(cls, ray, w->job->opts->ray_log_ctx);
+        w->job->opts->ray_log(cls, ray, from, w->job->opts->ray_log_ctx);
     bsp_query_counters before = w->query->counters;
-    int found = bsp_intersect(w->job->accel, w->query, ray, &hit);
+    int found = bsp_intersect_from(w->job->accel, w->query, ray, from, &hit);
     account(w, cls, &before);
     w->stats.cls[cls].rays++;
     if (!found) {
@@ -214,7 +252,7 @@ static void render_rows(worker *w)
         for (int x = 0; x < width; x++) {
             bsp_ray r = camera_ray(&job->cam, x, y);
             double c[3];
-            trace(w, &r, 0, BSP_RAY_PRIMARY, c);
+            trace(w, &r, BSP_NO_PRIM, 0, BSP_RAY_PRIMARY, c);
             for (int k = 0; k < 3; k++)
                 row[3 * x + k] = (float)c[k];
         }

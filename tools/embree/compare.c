@@ -135,8 +135,9 @@ typedef struct ray_list {
     size_t n, cap;
 } ray_list;
 
-static void record_primary(bsp_ray_class cls, const bsp_ray *ray, void *ctx)
+static void record_primary(bsp_ray_class cls, const bsp_ray *ray, uint32_t from, void *ctx)
 {
+    (void)from; /* BSP_NO_PRIM for a primary ray */
     ray_list *list = ctx;
     if (cls == BSP_RAY_PRIMARY)
         PUSH(list->rays, list->n, list->cap, *ray);
