@@ -26,7 +26,7 @@
 
 static const char ab_usage[] =
     "bspray ab SCENE [OPTIONS OF B...] [--res N] [--depth N] [--rays primary|all]\n"
-    "                [--rounds R] [--slice N]";
+    "                [--origin skip|test] [--rounds R] [--slice N]";
 
 static const char ab_help[] =
     "Time two structures on the same rays: A, the default (sah with the default costs), and\n"
@@ -36,7 +36,8 @@ static const char ab_help[] =
     "see the same machine. Prints the rays per second of both, B over A (the ratio of the\n"
     "best rounds, and the median of the rounds' ratios), and per ray the traversal steps\n"
     "N_TS, the intersection tests N_IT and the leaves of each tree. Every ray must get the\n"
-    "same answer from both (primitive, t, occlusion): exit status 1 if not.\n"
+    "same answer from both (primitive, t, occlusion): exit status 1 if not. With no\n"
+    "build option, B is A's very tree (no difference of placement in memory).\n"
     "\n"
     "  --res N            N x N rays, SPD corner sampling (default 513)\n"
     "  --depth N          ray depth of the recorded render with --rays all (default 4)\n"
@@ -44,6 +45,9 @@ static const char ab_help[] =
     "                     (shadow rays as occlusion queries)\n"
     "  --rounds R         rounds (default 5)\n"
     "  --slice N          rays per slice (default 2048)\n"
+    "  --origin skip|test B's queries leave out the primitive a shadow or secondary ray\n"
+    "                     leaves, as the renderer's do (skip, default; bsp_intersect_from),\n"
+    "                     or test it (the plain queries); A always leaves it out\n"
     "\n"
     "Options of B (A keeps the defaults):\n";
 
@@ -74,12 +78,13 @@ static answer shoot(const bsp_accel *accel, bsp_query *q, const bsp_ray *ray, ui
 
 /* CPU seconds of shooting RAYS[from..to) through ACCEL (SHADOW: as
  * occlusion queries). The calls update the query's counters, so they stay. */
+/* ORIGIN: leave out each ray's origin primitive (set->from), or test it. */
 static double slice_seconds(const bsp_accel *accel, bsp_query *q, const bench_ray_set *set,
-                            size_t from, size_t to, int shadow)
+                            size_t from, size_t to, int shadow, int origin)
 {
     double t0 = bench_cpu_seconds();
     for (size_t i = from; i < to; i++)
-        (void)shoot(accel, q, &set->rays[i], set->from[i], shadow);
+        (void)shoot(accel, q, &set->rays[i], origin ? set->from[i] : BSP_NO_PRIM, shadow);
     return bench_cpu_seconds() - t0;
 }
 
@@ -94,6 +99,7 @@ int cmd_ab(int argc, char **argv)
     args a = {argc, 1, argv, ab_usage};
     const char *scene_path = NULL;
     int res = 513, depth = 4, all = 0, rounds = 5, slice = 2048;
+    int b_origin = 1, b_options = 0; /* B leaves origins out; build options given */
     bsp_build_options ob;
     bsp_build_options_defaults(&ob);
     for (; a.i < argc; a.i++) {
@@ -102,7 +108,16 @@ int cmd_ab(int argc, char **argv)
             printf("usage: %s\n\n%s%s", ab_usage, ab_help, build_args_help);
             return 0;
         } else if (parse_build_arg(&a, &ob)) {
+            b_options = 1;
             continue;
+        } else if (!strcmp(s, "--origin")) {
+            const char *v = opt_value(&a, s);
+            if (!strcmp(v, "skip"))
+                b_origin = 1;
+            else if (!strcmp(v, "test"))
+                b_origin = 0;
+            else
+                die_usage(a.usage, "--origin: expected skip or test, got '%s'", v);
         } else if (!strcmp(s, "--res")) {
             res = parse_int(&a, s, 2, 8192);
         } else if (!strcmp(s, "--depth")) {
@@ -129,7 +144,7 @@ int cmd_ab(int argc, char **argv)
     bsp_build_options oa;
     bsp_build_options_defaults(&oa);
     oa.threads = ob.threads;
-    bsp_accel *A = build_accel(scene, &oa), *B = build_accel(scene, &ob);
+    bsp_accel *A = build_accel(scene, &oa), *B = b_options ? build_accel(scene, &ob) : A;
 
     /* the rays: every class, or the primary rays alone (a depth-0 render
      * also spawns shadow rays; they are not used then) */
@@ -175,7 +190,8 @@ int cmd_ab(int argc, char **argv)
             const bsp_ray *r = &sets[c].rays[i];
             int shadow = c == BSP_RAY_SHADOW;
             uint32_t o = sets[c].from[i];
-            answer x = shoot(A, qa, r, o, shadow), y = shoot(B, qb, r, o, shadow);
+            answer x = shoot(A, qa, r, o, shadow),
+                   y = shoot(B, qb, r, b_origin ? o : BSP_NO_PRIM, shadow);
             differ += x.hit != y.hit || x.prim != y.prim || x.t != y.t;
         }
     }
@@ -191,11 +207,11 @@ int cmd_ab(int argc, char **argv)
             for (size_t from = 0; from < n; from += (size_t)slice, k++) {
                 size_t to = n - from < (size_t)slice ? n : from + (size_t)slice;
                 if ((k + (size_t)round) % 2 == 0) {
-                    ta += slice_seconds(A, qa, rays, from, to, shadow);
-                    tb += slice_seconds(B, qb, rays, from, to, shadow);
+                    ta += slice_seconds(A, qa, rays, from, to, shadow, 1);
+                    tb += slice_seconds(B, qb, rays, from, to, shadow, b_origin);
                 } else {
-                    tb += slice_seconds(B, qb, rays, from, to, shadow);
-                    ta += slice_seconds(A, qa, rays, from, to, shadow);
+                    tb += slice_seconds(B, qb, rays, from, to, shadow, b_origin);
+                    ta += slice_seconds(A, qa, rays, from, to, shadow, 1);
                 }
             }
         }
@@ -231,8 +247,9 @@ done:
     bench_free_ray_sets(sets);
     bsp_query_destroy(qa);
     bsp_query_destroy(qb);
+    if (B != A)
+        bsp_accel_destroy(B);
     bsp_accel_destroy(A);
-    bsp_accel_destroy(B);
     bsp_scene_destroy(scene);
     return status;
 }
