@@ -141,13 +141,16 @@ static void make_ref_scene(ref_scene *rs, uint64_t seed)
 }
 
 /* Independent closest hit: index and t, or -1. */
+/* The closest primitive but SKIP (-1: none) on the ray, or -1; its t in *T_OUT. */
 static int ref_closest(const ref_scene *rs, const double o_[3], const double d_[3], double tmin,
-                       double tmax, long double *t_out)
+                       double tmax, int skip, long double *t_out)
 {
     long double o[3] = {o_[0], o_[1], o_[2]}, d[3] = {d_[0], d_[1], d_[2]};
     int best = -1;
     long double bt = 0;
     for (int i = 0; i < NS + NT; i++) {
+        if (i == skip)
+            continue;
         long double t = i < NS ? ref_sphere_hit(&rs->s[i], o, d, tmin, tmax)
                                : ref_tri_hit(&rs->t[i - NS], o, d, tmin, tmax);
         if (t >= 0 && (best < 0 || t < bt)) {
@@ -202,7 +205,7 @@ TEST(naive_matches_independent_reference)
         bsp_hit h;
         int got = bsp_intersect(a, q, &ray, &h);
         long double rt;
-        int want = ref_closest(&rs, o, d, tmin, tmax, &rt);
+        int want = ref_closest(&rs, o, d, tmin, tmax, -1, &rt);
         CHECK_EQ_INT(got, want >= 0);
         if (got && want >= 0) {
             hits++;
@@ -281,22 +284,31 @@ TEST(cli_trace_matches_independent_reference)
     REQUIRE(f);
     enum { NR = 3000 };
     static double rays[NR][8];
+    static int skip[NR]; /* the origin primitive a line names, or -1 */
+    int skipped = 0;
     for (int i = 0; i < NR; i++) {
         random_ray(rays[i], rays[i] + 3);
         rays[i][6] = 0;
         rays[i][7] = INFINITY;
+        skip[i] = -1;
         if (i % 3 == 0) {
             rays[i][6] = rnd_range(0, 2);
             rays[i][7] = rnd_range(2, 12);
-            fprintf(f, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", rays[i][0],
+            if (i % 2 == 0) { /* leave out the primitive the ray would hit first */
+                long double rt;
+                skip[i] = ref_closest(&rs, rays[i], rays[i] + 3, rays[i][6], rays[i][7], -1, &rt);
+                skipped += skip[i] >= 0;
+            }
+            fprintf(f, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %d\n", rays[i][0],
                     rays[i][1], rays[i][2], rays[i][3], rays[i][4], rays[i][5], rays[i][6],
-                    rays[i][7]);
+                    rays[i][7], skip[i]);
         } else {
             fprintf(f, "%.17g %.17g %.17g %.17g %.17g %.17g\n", rays[i][0], rays[i][1],
                     rays[i][2], rays[i][3], rays[i][4], rays[i][5]);
         }
     }
     fclose(f);
+    CHECK_MSG(skipped > 50, "only %d lines leave a primitive out", skipped);
     for (int any = 0; any < 2; any++) {
         char cmd[2048];
         snprintf(cmd, sizeof cmd, "%s trace %s --rays %s%s", harness_cli(), rs.nff_path,
@@ -312,7 +324,8 @@ TEST(cli_trace_matches_independent_reference)
             if (next)
                 *next++ = 0;
             long double rt;
-            int want = ref_closest(&rs, rays[i], rays[i] + 3, rays[i][6], rays[i][7], &rt);
+            int want =
+                ref_closest(&rs, rays[i], rays[i] + 3, rays[i][6], rays[i][7], skip[i], &rt);
             if (any) {
                 CHECK_MSG(!strcmp(line, want >= 0 ? "occluded" : "clear"), "ray %d: '%s'", i,
                           line);
@@ -350,7 +363,11 @@ TEST(cli_trace_rejects_bad_rays)
         {"0 0 0 1 0 nan\n", "malformed or non-finite", 1},
         {"0 0 0 1 0 x\n", "malformed or non-finite", 1},
         {"# c\n\n0 0 0 1 0 0 5 1\n", "tmax is smaller than tmin", 3},
-        {"0 0 0 1 0 0 0 1 7\n", "too many fields", 1},
+        {"0 0 0 1 0 0 0 1 7 8\n", "too many fields", 1},
+        {"0 0 0 1 0 0\n0 0 0 1 0 0 0 1 100000\n", "origin primitive out of range", 2},
+        {"0 0 0 1 0 0 0 1 -2\n", "origin primitive out of range", 1},
+        {"0 0 0 1 0 0 0 1 2.5\n", "malformed origin primitive", 1},
+        {"0 0 0 1 0 0 0 1 x\n", "malformed origin primitive", 1},
         {"inf 0 0 1 0 0\n", "malformed or non-finite", 1},
         /* out of the domain where t and the kernels' squares stay finite */
         {"0 0 0 1 0 0\n2e30 0 0 1 0 0\n", "origin out of range", 2},

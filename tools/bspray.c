@@ -315,9 +315,11 @@ static const char trace_usage[] =
 static const char trace_help[] =
     "Shoot the rays of FILE ('-' for standard input) into SCENE, one query per line.\n"
     "\n"
-    "Input: one ray per line, 'ox oy oz dx dy dz [tmin tmax]' (blank lines and lines\n"
-    "starting with '#' are skipped). The direction need not be unit length: t is in\n"
-    "units of the given direction. tmin defaults to 0 and tmax to infinity ('inf').\n"
+    "Input: one ray per line, 'ox oy oz dx dy dz [tmin tmax [from]]' (blank lines and\n"
+    "lines starting with '#' are skipped). The direction need not be unit length: t is\n"
+    "in units of the given direction. tmin defaults to 0 and tmax to infinity ('inf').\n"
+    "from: the 0-based index of a primitive the query leaves out, the one a shadow or\n"
+    "reflected ray starts on (bsp_intersect_from), or -1 for none (the default).\n"
     "\n"
     "Output: one line per ray, 'hit INDEX T' (INDEX the 0-based primitive index in file\n"
     "order, T printed with %.9g) or 'miss'; with --any, 'occluded' or 'clear' for the\n"
@@ -420,12 +422,27 @@ static int cmd_trace(int argc, char **argv)
         while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n')
             p++;
         const char *bad = NULL;
-        if (n < 8 && r < 0)
+        long long from = -1; /* the primitive left out, after tmin and tmax */
+        if (n == 8 && *p) {
+            char *e;
+            errno = 0;
+            from = strtoll(p, &e, 10);
+            if (e == p || errno || !(*e == 0 || *e == ' ' || *e == '\t' || *e == '\r' ||
+                                     *e == '\n'))
+                bad = "malformed origin primitive (expected an integer index, or -1)";
+            else if (from < -1 || from >= (long long)bsp_scene_prim_count(scene))
+                bad = "origin primitive out of range (a primitive index of the scene, or -1)";
+            for (p = e; *p == ' ' || *p == '\t' || *p == '\r' || *p == '\n';)
+                p++;
+        }
+        if (bad)
+            ;
+        else if (n < 8 && r < 0)
             bad = "malformed or non-finite number";
         else if (*p)
-            bad = "too many fields (expected 'ox oy oz dx dy dz [tmin tmax]')";
+            bad = "too many fields (expected 'ox oy oz dx dy dz [tmin tmax [from]]')";
         else if (n != 6 && n != 8)
-            bad = "expected 6 or 8 numbers: 'ox oy oz dx dy dz [tmin tmax]'";
+            bad = "expected 6 or 8 numbers: 'ox oy oz dx dy dz [tmin tmax [from]]'";
         else if (v[3] == 0 && v[4] == 0 && v[5] == 0)
             bad = "the direction is the zero vector";
         else if (fabs(v[0]) > BSP_SCENE_MAX_COORD || fabs(v[1]) > BSP_SCENE_MAX_COORD ||
@@ -444,11 +461,12 @@ static int cmd_trace(int argc, char **argv)
             break;
         }
         bsp_ray ray = {bsp_v3(v[0], v[1], v[2]), bsp_v3(v[3], v[4], v[5]), v[6], v[7]};
+        const uint32_t origin = from < 0 ? BSP_NO_PRIM : (uint32_t)from;
         if (any) {
-            puts(bsp_occluded(accel, q, &ray) ? "occluded" : "clear");
+            puts(bsp_occluded_from(accel, q, &ray, origin) ? "occluded" : "clear");
         } else {
             bsp_hit hit;
-            if (bsp_intersect(accel, q, &ray, &hit))
+            if (bsp_intersect_from(accel, q, &ray, origin, &hit))
                 printf("hit %" PRIu32 " %.9g\n", hit.prim, hit.t + 0.0); /* -0 prints as 0 */
             else
                 puts("miss");
