@@ -538,6 +538,74 @@ TEST(kd_exact_stress_duplicates_and_degenerates)
     bsp_scene_destroy(s);
 }
 
+/* A query that names no primitive of any leaf leaves nothing out: FROM a
+ * dropped primitive (a zero sphere, a collinear triangle), one past the
+ * last, far past it, or BSP_NO_PRIM gives every method the plain query's
+ * answer and the same number of tests; FROM a live primitive gives fewer
+ * tests over the rays that meet it. */
+TEST(kd_from_names_nothing_to_leave_out)
+{
+    bsp_scene *s = bsp_scene_create();
+    bsp_error err;
+    rng = 47;
+    for (int i = 0; i < 40; i++) {
+        bsp_vec3 c = bsp_v3(rnd_in(-5, 5), rnd_in(-5, 5), rnd_in(-5, 5));
+        add_sphere(s, c, rnd_in(0.2, 1.5));
+        REQUIRE(bsp_scene_add_sphere(s, c, 0.0, &err) == BSP_OK); /* dropped: 3i + 1 */
+        add_tri(s, c, v3_add(c, bsp_v3(1, 0, 0)), v3_add(c, bsp_v3(2, 0, 0))); /* 3i + 2 */
+    }
+    const uint32_t np = (uint32_t)bsp_scene_prim_count(s);
+    REQUIRE(np == 120 && s->prims[1].shape == SHAPE_NONE && s->prims[2].shape == SHAPE_NONE);
+    const uint32_t nothing[] = {1, 2, 61, 119, np, np + 1000, UINT32_MAX - 1, BSP_NO_PRIM};
+    bsp_accel *acc[5];
+    bsp_build_options o;
+    for (int v = 0; v < 5; v++) {
+        bsp_build_options_defaults(&o);
+        o.kind = v == 0 ? BSP_ACCEL_NAIVE : v < 3 ? BSP_ACCEL_KAPLAN : BSP_ACCEL_SAH;
+        o.mailbox = v % 2;
+        REQUIRE(bsp_accel_build(s, &o, &acc[v], &err) == BSP_OK);
+    }
+    bsp_box box = bsp_scene_bounds(s);
+    for (int v = 0; v < 5; v++) {
+        bsp_query *q1 = bsp_query_create(acc[v]), *q2 = bsp_query_create(acc[v]);
+        REQUIRE(q1 && q2);
+        int bad = 0, left_out = 0;
+        for (int i = 0; i < 2000; i++) {
+            bsp_ray r = {bsp_v3(rnd_in(box.lo.x, box.hi.x), rnd_in(box.lo.y, box.hi.y),
+                                rnd_in(box.lo.z, box.hi.z)),
+                         bsp_v3(rnd_in(-1, 1), rnd_in(-1, 1), rnd_in(-1, 1)), 0.0, INFINITY};
+            bsp_hit h1, h2;
+            uint64_t t0 = bsp_query_get_counters(q1)->isect_tests;
+            int f1 = bsp_intersect(acc[v], q1, &r, &h1);
+            uint64_t t1 = bsp_query_get_counters(q1)->isect_tests;
+            int o1 = bsp_occluded(acc[v], q1, &r);
+            uint64_t t2 = bsp_query_get_counters(q1)->isect_tests;
+            for (size_t k = 0; k < sizeof nothing / sizeof nothing[0]; k++) {
+                uint64_t u0 = bsp_query_get_counters(q2)->isect_tests;
+                int f2 = bsp_intersect_from(acc[v], q2, &r, nothing[k], &h2);
+                uint64_t u1 = bsp_query_get_counters(q2)->isect_tests;
+                int o2 = bsp_occluded_from(acc[v], q2, &r, nothing[k]);
+                uint64_t u2 = bsp_query_get_counters(q2)->isect_tests;
+                /* the same answers from the same tests */
+                bad += !same_hit(f1, &h1, f2, &h2) || o1 != o2 || u1 - u0 != t1 - t0 ||
+                       u2 - u1 != t2 - t1;
+            }
+            if (f1) { /* the hit primitive left out: not hit again */
+                int f2 = bsp_intersect_from(acc[v], q2, &r, h1.prim, &h2);
+                bad += f2 && h2.prim == h1.prim;
+                left_out++;
+            }
+        }
+        CHECK_MSG(bad == 0, "variant %d: %d rays differ in answers or tests", v, bad);
+        CHECK_MSG(left_out > 100, "variant %d: only %d rays hit", v, left_out);
+        bsp_query_destroy(q1);
+        bsp_query_destroy(q2);
+    }
+    for (int v = 0; v < 5; v++)
+        bsp_accel_destroy(acc[v]);
+    bsp_scene_destroy(s);
+}
+
 TEST(kd_empty_scene_and_single_primitive)
 {
     bsp_scene *s = bsp_scene_create();
