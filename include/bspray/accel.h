@@ -288,9 +288,10 @@ int bsp_occluded(const bsp_accel *accel, bsp_query *query, const bsp_ray *ray);
  * are still the naive method's for the same FROM. Meant for rays that start
  * on FROM and cannot meet it again: a ray leaving a planar primitive (a
  * triangle, polygon or patch), or leaving a sphere or cone on the outer side
- * of its surface. For those it spares the test (one per shadow or secondary
- * ray: a fifth of lattice's tests) and a self-hit that rounding could
- * report. The renderer casts its shadow and secondary rays this way. */
+ * of its surface. For those it spares a test (one per shadow or secondary
+ * ray: lattice's render makes 5.11 tests per ray instead of 5.91) and any
+ * self-hit that rounding could report. The renderer casts its shadow and
+ * secondary rays this way where that holds. */
 int bsp_intersect_from(const bsp_accel *accel, bsp_query *query, const bsp_ray *ray,
                        uint32_t from, bsp_hit *hit);
 int bsp_occluded_from(const bsp_accel *accel, bsp_query *query, const bsp_ray *ray,
