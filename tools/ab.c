@@ -76,9 +76,10 @@ static answer shoot(const bsp_accel *accel, bsp_query *q, const bsp_ray *ray, ui
     return a;
 }
 
-/* CPU seconds of shooting RAYS[from..to) through ACCEL (SHADOW: as
- * occlusion queries). The calls update the query's counters, so they stay. */
-/* ORIGIN: leave out each ray's origin primitive (set->from), or test it. */
+/* CPU seconds of shooting SET's rays [from..to) through ACCEL (SHADOW: as
+ * occlusion queries; ORIGIN: each leaving out its origin primitive,
+ * set->from, else testing it). The calls update the query's counters, so
+ * they stay. */
 static double slice_seconds(const bsp_accel *accel, bsp_query *q, const bench_ray_set *set,
                             size_t from, size_t to, int shadow, int origin)
 {
@@ -111,13 +112,7 @@ int cmd_ab(int argc, char **argv)
             b_options = 1;
             continue;
         } else if (!strcmp(s, "--origin")) {
-            const char *v = opt_value(&a, s);
-            if (!strcmp(v, "skip"))
-                b_origin = 1;
-            else if (!strcmp(v, "test"))
-                b_origin = 0;
-            else
-                die_usage(a.usage, "--origin: expected skip or test, got '%s'", v);
+            b_origin = !parse_one_of_two(&a, s, "skip", "test");
         } else if (!strcmp(s, "--res")) {
             res = parse_int(&a, s, 2, 8192);
         } else if (!strcmp(s, "--depth")) {
@@ -127,13 +122,7 @@ int cmd_ab(int argc, char **argv)
         } else if (!strcmp(s, "--slice")) {
             slice = parse_int(&a, s, 1, 1 << 24);
         } else if (!strcmp(s, "--rays")) {
-            const char *v = opt_value(&a, s);
-            if (!strcmp(v, "all"))
-                all = 1;
-            else if (!strcmp(v, "primary"))
-                all = 0;
-            else
-                die_usage(a.usage, "--rays: expected primary or all, got '%s'", v);
+            all = parse_one_of_two(&a, s, "primary", "all");
         } else {
             take_operand(&a, &scene_path);
         }

@@ -56,6 +56,19 @@ int parse_on_off(args *a, const char *opt)
     return 0;
 }
 
+int parse_one_of_two(args *a, const char *opt, const char *w0, const char *w1)
+{
+    const char *v = opt_value(a, opt);
+    if (!strcmp(v, w0))
+        return 0;
+    if (!strcmp(v, w1))
+        return 1;
+    char msg[256];
+    snprintf(msg, sizeof msg, "%s: expected %s or %s, got '%s'", opt, w0, w1, v);
+    die_usage(a->usage, "%s", msg);
+    return 0;
+}
+
 bsp_mixed_model parse_mixed_model(args *a, const char *opt)
 {
     const char *v = opt_value(a, opt);

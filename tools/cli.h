@@ -26,6 +26,8 @@ const char *opt_value(args *a, const char *opt);
 /* A whole number in [LO, HI] as the value of OPT, or a usage error. */
 int parse_int(args *a, const char *opt, long lo, long hi);
 int parse_on_off(args *a, const char *opt);
+/* 0 when the value of OPT is W0, 1 when it is W1, or a usage error. */
+int parse_one_of_two(args *a, const char *opt, const char *w0, const char *w1);
 /* counted, sampled or surface: sah-mixed's model (--mixed-model). */
 bsp_mixed_model parse_mixed_model(args *a, const char *opt);
 int is_help(const char *s);
