@@ -267,7 +267,7 @@ static long stats_field(const char *out, const char *label)
     return p ? strtol(p + strlen(label), NULL, 10) : -1;
 }
 
-/* --costs, --empty-bonus, --min-saving and --leaf-budget reach the builder: the CLI's tree has the
+/* --costs, --empty-bonus, --min-saving, --leaf-budget and --straddle reach the builder: the CLI's tree has the
  * leaves and references of the tree the API builds with the same costs (an independent build),
  * which differ from the default tree's; bad lists are usage errors (exit 2) that name the option.
  */
@@ -372,6 +372,42 @@ TEST(cli_costs_reach_the_builder)
     CHECK(stats_field(out, "N_V") == (long)want.leaves);
     CHECK(stats_field(out, "N_OIV") == (long)want.references);
     free(out);
+
+    /* --straddle twice reaches it (shells:2: the plain model's tree is far
+     * smaller); --mailbox off alone keeps the default tree */
+    REQUIRE(bsp_scene_load("spd:shells:2", &s, &err) == BSP_OK);
+    bsp_build_options_defaults(&o);
+    o.sah_straddle_twice = 1;
+    REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+    bsp_accel_tree_stats(a, &want);
+    bsp_accel_destroy(a);
+    bsp_build_options_defaults(&o);
+    REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+    bsp_accel_tree_stats(a, &plain);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+    CHECK(want.leaves < plain.leaves);
+    const char *straddle[] = {"--straddle twice", "--mailbox off --straddle twice",
+                              "--mailbox off", "--straddle once"};
+    for (int i = 0; i < 4; i++) {
+        snprintf(cmd, sizeof cmd, "%s stats spd:shells:2 --accel sah %s", harness_cli(),
+                 straddle[i]);
+        out = harness_run(cmd, &st);
+        REQUIRE(out);
+        CHECK_EQ_INT(st, 0);
+        CHECK_MSG(stats_field(out, "N_V") == (long)(i < 2 ? want.leaves : plain.leaves),
+                  "%s: N_V %ld", straddle[i], stats_field(out, "N_V"));
+        free(out);
+    }
+    for (int i = 0; i < 2; i++) {
+        snprintf(cmd, sizeof cmd, "%s stats spd:shells:2 --accel sah --straddle %s 2>&1",
+                 harness_cli(), i ? "" : "thrice");
+        out = harness_run(cmd, &st);
+        REQUIRE(out);
+        CHECK_EQ_INT(st, 2);
+        CHECK_STR_CONTAINS(out, "--straddle");
+        free(out);
+    }
 
     const char *bad[] = {
         "--costs sphere",         "--costs sphere=0",         "--costs bogus=1",

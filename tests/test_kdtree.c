@@ -145,6 +145,9 @@ static int kd_variants(bsp_build_options *o)
             bsp_build_options_defaults(&o[n]);
             o[n].kind = (bsp_accel_kind)k;
             o[n].mailbox = v > 0;
+            /* without mailboxes, the plain model's tree (with them, the
+             * mailbox term's: the default either way) */
+            o[n].sah_straddle_twice = v == 0;
             o[n].mixed_model = v == 0 ? BSP_MIXED_SAMPLED
                                : v == 1 ? BSP_MIXED_SURFACE
                                         : BSP_MIXED_COUNTED;

@@ -1,9 +1,10 @@
 /*
  * ab.c — `bspray ab`: two structures timed on the same rays, side by side.
  *
- * A is the default structure (bsp_build_options_defaults: sah); B is A
- * changed by the build options on the command line (--accel, --costs,
- * --empty-bonus, --max-depth, ...). The rays of one render are recorded
+ * A is the default structure (bsp_build_options_defaults: sah), or the
+ * defaults changed by the build options after --a; B is the defaults
+ * changed by the other build options on the command line (--accel,
+ * --costs, --empty-bonus, --max-depth, ...). The rays of one render are recorded
  * once; then each round shoots them through A and B in alternating slices,
  * the order alternating from slice to slice and from round to round, on one
  * thread, timed by the thread's CPU time. This VM's speed swings within
@@ -25,8 +26,8 @@
 #include "cli.h"
 
 static const char ab_usage[] =
-    "bspray ab SCENE [OPTIONS OF B...] [--res N] [--depth N] [--rays primary|all]\n"
-    "                [--origin skip|test] [--rounds R] [--slice N]";
+    "bspray ab SCENE [OPTIONS OF B...] [--a OPTIONS OF A... --b] [--res N] [--depth N]\n"
+    "                [--rays primary|all] [--origin skip|test] [--rounds R] [--slice N]";
 
 static const char ab_help[] =
     "Time two structures on the same rays: A, the default (sah with the default costs), and\n"
@@ -48,8 +49,11 @@ static const char ab_help[] =
     "  --origin skip|test B's queries leave out the primitive a shadow or secondary ray\n"
     "                     leaves, as the renderer's do (skip, default; bsp_intersect_from),\n"
     "                     or test it (the plain queries); A always leaves it out\n"
+    "  --a, --b           the build options after --a change A instead of B, up to --b;\n"
+    "                     e.g. `--a --mailbox off --b --mailbox off --empty-bonus 0.2`\n"
+    "                     times two trees without mailboxes against each other\n"
     "\n"
-    "Options of B (A keeps the defaults):\n";
+    "Options of B (A keeps the defaults unless given after --a):\n";
 
 /* One ray through ACCEL: its answer as (hit, primitive, t); shadow rays as
  * occlusion queries. */
@@ -100,16 +104,20 @@ int cmd_ab(int argc, char **argv)
     args a = {argc, 1, argv, ab_usage};
     const char *scene_path = NULL;
     int res = 513, depth = 4, all = 0, rounds = 5, slice = 2048;
-    int b_origin = 1, b_options = 0; /* B leaves origins out; build options given */
-    bsp_build_options ob;
+    int b_origin = 1, a_options = 0, b_options = 0; /* B leaves origins out; options given */
+    bsp_build_options oa, ob;
+    bsp_build_options_defaults(&oa);
     bsp_build_options_defaults(&ob);
+    int to_a = 0; /* the build options go to A (after --a, up to --b) */
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {
             printf("usage: %s\n\n%s%s", ab_usage, ab_help, build_args_help);
             return 0;
-        } else if (parse_build_arg(&a, &ob)) {
-            b_options = 1;
+        } else if (!strcmp(s, "--a") || !strcmp(s, "--b")) {
+            to_a = s[2] == 'a';
+        } else if (parse_build_arg(&a, to_a ? &oa : &ob)) {
+            *(to_a ? &a_options : &b_options) = 1;
             continue;
         } else if (!strcmp(s, "--origin")) {
             b_origin = !parse_one_of_two(&a, s, "skip", "test");
@@ -130,10 +138,10 @@ int cmd_ab(int argc, char **argv)
     if (!scene_path)
         die_usage(a.usage, "%s", "missing SCENE");
     bsp_scene *scene = load_scene(scene_path);
-    bsp_build_options oa;
-    bsp_build_options_defaults(&oa);
-    oa.threads = ob.threads;
-    bsp_accel *A = build_accel(scene, &oa), *B = b_options ? build_accel(scene, &ob) : A;
+    if (!a_options)
+        oa.threads = ob.threads;
+    bsp_accel *A = build_accel(scene, &oa),
+              *B = a_options || b_options ? build_accel(scene, &ob) : A;
 
     /* the rays: every class, or the primary rays alone (a depth-0 render
      * also spawns shadow rays; they are not used then) */

@@ -316,7 +316,11 @@ static int in_saving_range(double x)
     "  --budget-cut F|off sah family: estimate the budget's threshold from a sample of\n"     \
     "                     subtrees and skip the splits saving less than F times it, F > 0\n" \
     "                     (default 0.5; any F builds the same tree, a large one only\n"       \
-    "                     twice); off builds the whole tree, then prunes\n"
+    "                     twice); off builds the whole tree, then prunes\n"                   \
+    "  --straddle once|twice  sah family: a primitive straddling a split costs a ray\n"      \
+    "                     through both children one test and a mailbox hit (once, the\n"    \
+    "                     default, with mailboxes on or off) or two tests (twice:\n"        \
+    "                     MacDonald and Booth's plain model)\n"
 
 int parse_cost_arg(args *a, cost_args *c)
 {
@@ -338,6 +342,8 @@ int parse_cost_arg(args *a, cost_args *c)
         const char *v = opt_value(a, s);
         c->budget_cut = !strcmp(v, "off") ? -1.0
                                            : parse_real(a, s, v, positive_share, "a number > 0 or 'off'");
+    } else if (!strcmp(s, "--straddle")) {
+        c->straddle_twice = parse_one_of_two(a, s, "once", "twice");
     } else {
         return 0;
     }
@@ -352,6 +358,7 @@ void apply_cost_args(const cost_args *c, bsp_build_options *o)
     o->sah_leaf_budget = c->leaf_budget;
     o->sah_leaf_budget_min = c->leaf_budget_min;
     o->sah_budget_cut = c->budget_cut;
+    o->sah_straddle_twice = c->straddle_twice;
 }
 
 const char build_args_help[] =
@@ -399,10 +406,10 @@ int parse_build_arg(args *a, bsp_build_options *opts)
         opts->mixed_check = parse_on_off(a, s);
     } else if (!strcmp(s, "--costs") || !strcmp(s, "--empty-bonus") || !strcmp(s, "--min-saving") ||
                !strcmp(s, "--leaf-budget") || !strcmp(s, "--leaf-budget-min") ||
-               !strcmp(s, "--budget-cut")) {
+               !strcmp(s, "--budget-cut") || !strcmp(s, "--straddle")) {
         cost_args c = {opts->sah_costs, opts->sah_empty_bonus, opts->sah_min_saving,
                        opts->sah_leaf_budget, opts->sah_leaf_budget_min,
-                       opts->sah_budget_cut};
+                       opts->sah_budget_cut, opts->sah_straddle_twice};
         parse_cost_arg(a, &c);
         apply_cost_args(&c, opts);
     } else if (!strcmp(s, "--mixed-share")) {

@@ -50,7 +50,7 @@ int parse_build_arg(args *a, bsp_build_options *opts);
 extern const char build_args_help[];
 
 /* The SAH cost model of the command line: --costs, --empty-bonus,
- * --min-saving, --leaf-budget, --leaf-budget-min and --budget-cut (also taken by
+ * --min-saving, --leaf-budget, --leaf-budget-min, --budget-cut and --straddle (also taken by
  * parse_build_arg) for the commands that build
  * several structures (bench, bench --paper, bench --scaling, viz). */
 typedef struct cost_args {
@@ -60,6 +60,7 @@ typedef struct cost_args {
     double leaf_budget;  /* as bsp_build_options.sah_leaf_budget */
     size_t leaf_budget_min; /* as bsp_build_options.sah_leaf_budget_min */
     double budget_cut;   /* as bsp_build_options.sah_budget_cut */
+    int straddle_twice;  /* as bsp_build_options.sah_straddle_twice */
 } cost_args;
 /* Consumes one of those options like parse_build_arg. */
 int parse_cost_arg(args *a, cost_args *c);

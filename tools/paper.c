@@ -77,7 +77,7 @@ typedef struct cell {
 typedef struct paper_opts {
     int res, depth, threads, nvalidate, quiet, repeat;
     int cost_termination; /* 0: split to the limits, as the paper */
-    int mailbox;          /* traversal with mailboxes, trees built for them (default 1) */
+    int mailbox;          /* traversal with mailboxes (default 1) */
     bsp_mixed_model mixed_model; /* sah-mixed's model of the other rays */
     int mixed_check;             /* sah-mixed's check against sah (default 1) */
     paper_rule rules[MAX_RULES];
@@ -106,8 +106,9 @@ static void print_help(void)
            "  --validate N    random rays compared with naive before each render (default 5000)\n"
            "  --repeat N      N rounds, each rendering every rule's tree once; the best\n"
            "                  time of each (default 3; on 1 thread CPU time, else wall)\n"
-           "  --mailbox on|off  mailboxes in the traversal and in the trees' cost model\n"
-           "                  (default on; Havran's reference tables count without them)\n"
+           "  --mailbox on|off  mailboxes in the traversal (default on; Havran's reference\n"
+           "                  tables count without them); the trees keep the mailbox term\n"
+           "                  of the cost model either way unless --straddle twice\n"
            "  --mixed-model M sah-mixed's model of the non-primary rays: counted (default),\n"
            "                  sampled or surface (see 'bspray render --help')\n"
            "  --mixed-check on|off  sah-mixed keeps the sah tree where a 64 x 64 render's\n"

@@ -143,7 +143,7 @@ int cmd_viz(int argc, char **argv)
     double zoom = 1.0;
     draw_color_mode mode = DRAW_COLOR_DEPTH;
     view_args view = {0};
-    cost_args costs = {{0}, 0.0, 0.0, 0.0, 0, 0.0};
+    cost_args costs = {{0}, 0.0, 0.0, 0.0, 0, 0.0, 0};
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {

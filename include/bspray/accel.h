@@ -129,6 +129,11 @@ typedef struct bsp_build_options {
     int sah_split_to_limits; /* sah family: 1 splits every node until max_depth or
                                 max_leaf_prims ends it (the paper's termination criteria);
                                 0 (default): also a leaf when the best split does not pay */
+    int sah_straddle_twice;  /* sah family: 1 charges a primitive that straddles a split
+                                in full in both children, also for the rays through both
+                                (MacDonald and Booth's plain model); 0 (default): its
+                                second test is charged as a mailbox hit — with or without
+                                mailboxes, whose trees it makes faster too (docs/kdtree.md) */
     bsp_view view;           /* sah-per, sah-par, sah-mixed: the camera (default: the scene's) */
     double mixed_primary_share; /* sah-mixed: primary rays / all rays of the render, in
                                    (0, 1]; 0: measured by a 65 x 65 pre-pass of the Whitted

@@ -39,8 +39,10 @@ typedef struct kd_cost_model {
     double budget_cut;  /* > 0: the share of the budget's estimated threshold below
                            which splits are not made (bsp_build_options.sah_budget_cut);
                            0: no estimate */
-    int mailbox;        /* the tree is traversed with mailboxes: a primitive met
-                           again in a later leaf costs mailbox_hit, not T_i */
+    int mailbox_term;   /* the mailbox term: a straddler met again in the second
+                           child costs mailbox_hit, not T_i (the default, for
+                           trees traversed with or without mailboxes; 0 with
+                           bsp_build_options.sah_straddle_twice: the plain model) */
     double mailbox_hit; /* the cost of that skipped test, in units of C_trav */
 } kd_cost_model;
 
@@ -69,7 +71,8 @@ HIDDEN void kd_cost_defaults(bsp_sah_costs *c);
 #define KD_MAILBOX_HIT_COST 0.15
 
 /* Resolves the SAH fields of O: every 0 (or invalid) field takes its default;
- * a negative empty bonus means none; mailbox from O->mailbox. */
+ * a negative empty bonus means none; the mailbox term unless
+ * O->sah_straddle_twice. */
 HIDDEN void kd_cost_resolve(const bsp_build_options *o, kd_cost_model *m);
 
 /* T_i of primitive PRIM (a live one) under costs C. */

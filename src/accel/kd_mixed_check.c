@@ -48,7 +48,7 @@ static double rays_cost(const bsp_accel *a, const bsp_ray *rays, const uint8_t *
     }
     const bsp_query_counters *c = bsp_query_get_counters(q);
     double cost = cm->c.traversal * (double)c->traversal_steps + t_mean * (double)c->isect_tests;
-    if (cm->mailbox)
+    if (cm->mailbox_term)
         cost += cm->mailbox_hit * (double)c->mailbox_hits;
     bsp_query_destroy(q);
     return n ? cost / (double)n : 0.0;

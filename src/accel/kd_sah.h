@@ -144,7 +144,7 @@ typedef struct sah_build {
                                in the tasks built after it (sah_tasks.raised) */
     double inv_root_area; /* 1 / the root cell's surface area */
     int record_savings;   /* record every split's saving in t->saving (kd_prune.h) */
-    int mailbox;        /* mailbox-aware costs (kd_cost_model.mailbox) */
+    int mailbox;        /* mailbox-aware costs (kd_cost_model.mailbox_term) */
     double mb_hit;      /* the cost of a test the mailbox skips */
     int cost_mode;      /* COST_*: how an event finds its T_i */
     double unif;        /* COST_UNIFORM: the T_i of every primitive */

@@ -695,7 +695,7 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
     b.to_limits = o->sah_split_to_limits != 0;
     b.ctrav = cm.c.traversal;
     b.bonus_mul = 1.0 - cm.empty_bonus;
-    b.mailbox = cm.mailbox;
+    b.mailbox = cm.mailbox_term;
     b.mb_hit = cm.mailbox_hit;
     b.err = err;
     b.progress = o->progress;
