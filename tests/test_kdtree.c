@@ -541,6 +541,52 @@ TEST(kd_exact_stress_duplicates_and_degenerates)
     bsp_scene_destroy(s);
 }
 
+/* Without mailboxes a leaf entry that is the primitive of the best hit so
+ * far is not tested again (kd_traverse.c): a ray from inside a big sphere
+ * that every leaf on its path lists, whose hit (the sphere's far side) lies
+ * in its last cell, tests the sphere once, as with mailboxes, and gets the
+ * same hit, though it visits several leaves. */
+TEST(kd_no_mailbox_skips_the_best_hits_primitive)
+{
+    bsp_scene *s = bsp_scene_create();
+    add_sphere(s, bsp_v3(0, 0, 0), 1.0); /* 0 */
+    for (int i = 0; i < 8; i++) /* tiny spheres inside it, off the ray: splits */
+        add_sphere(s, bsp_v3(i & 1 ? 0.5 : -0.5, i & 2 ? 0.5 : -0.5, i & 4 ? 0.5 : -0.5), 0.01);
+    const bsp_ray ray = {bsp_v3(-0.2, 0.01, 0.02), bsp_v3(1, 0, 0), 0.0, INFINITY};
+    for (int kind = 0; kind < 2; kind++) {
+        uint64_t tests[2], leaves[2];
+        bsp_hit h[2];
+        for (int mb = 0; mb < 2; mb++) {
+            bsp_build_options o;
+            bsp_build_options_defaults(&o);
+            o.kind = kind ? BSP_ACCEL_SAH : BSP_ACCEL_KAPLAN;
+            o.mailbox = mb;
+            o.sah_split_to_limits = 1; /* cut the sphere into many cells */
+            o.max_depth = 9;
+            bsp_accel *a = NULL;
+            bsp_error err;
+            REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+            bsp_query *q = bsp_query_create(a);
+            REQUIRE(q);
+            REQUIRE(bsp_intersect(a, q, &ray, &h[mb]));
+            tests[mb] = bsp_query_get_counters(q)->isect_tests;
+            leaves[mb] = bsp_query_get_counters(q)->leaves_visited;
+            bsp_query_destroy(q);
+            bsp_accel_destroy(a);
+        }
+        CHECK_EQ_INT(h[0].prim, 0);
+        CHECK(h[0].prim == h[1].prim && h[0].t == h[1].t);
+        CHECK_MSG(leaves[0] >= 2, "%s: %llu leaves", kind ? "sah" : "kaplan",
+                  (unsigned long long)leaves[0]);
+        /* with mailboxes each primitive once; without, so too: no tiny sphere
+         * lies in two of the ray's leaves, and the big one is skipped */
+        CHECK_MSG(tests[0] == tests[1], "%s: %llu tests without mailboxes, %llu with",
+                  kind ? "sah" : "kaplan", (unsigned long long)tests[0],
+                  (unsigned long long)tests[1]);
+    }
+    bsp_scene_destroy(s);
+}
+
 /* A query that names no primitive of any leaf leaves nothing out: FROM a
  * dropped primitive (a zero sphere, a collinear triangle), one past the
  * last, far past it, or BSP_NO_PRIM gives every method the plain query's

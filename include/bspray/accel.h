@@ -258,8 +258,9 @@ typedef struct bsp_query_counters {
     uint64_t leaves_visited;  /* N_ETS numerator */
     uint64_t empty_leaves;    /* N_EETS numerator */
     uint64_t mailbox_hits;    /* leaf entries not tested: tested before with the same ray
-                                 (mailbox), or the ray's origin primitive
-                                 (bsp_intersect_from) */
+                                 (mailbox), the ray's origin primitive
+                                 (bsp_intersect_from), or, without mailboxes, the
+                                 primitive of the closest hit so far */
 } bsp_query_counters;
 
 /* Per-thread query state for ACCEL (borrowed). NULL when out of memory. */

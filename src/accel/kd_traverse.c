@@ -381,6 +381,10 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t 
     double tmax = ray->tmax;
     scene_isect_hit best = {INFINITY, 0.0, 0.0, 1.0}, h;
     uint32_t best_p = BSP_NO_PRIM;
+    /* without the mailbox, the best hit's local number: met again in a later
+     * leaf, its test would find the same hit at t = tmax, not a better one,
+     * so it is not made (the hit record is the one memory of the ray) */
+    uint32_t best_l = UINT32_MAX;
     uint64_t interior = 0, leaves = 0, nonempty = 0, refs = 0, tests = 0;
     const char *base = (const char *)t->walk; /* kd_walk.h */
     size_t off = 0; /* the root */
@@ -402,7 +406,7 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t 
                     if (mbox[l] == stamp)
                         continue;
                     mbox[l] = stamp;
-                } else if (l == skip) {
+                } else if (l == skip || l == best_l) {
                     continue;
                 }
                 tests++;
@@ -411,6 +415,7 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t 
                     if (h.t < best.t || p < best_p) {
                         best = h;
                         best_p = p;
+                        best_l = l;
                         tmax = h.t;
                     }
                 }
