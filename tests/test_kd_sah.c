@@ -1708,6 +1708,7 @@ TEST(sah_small_sweep_matches_the_sweep_of_runs)
         b.unif = 1.25;
         for (int c = 0; c < 8; c++)
             b.class_cost[c] = 0.25 * (double)(1 + c);
+        kd_sah_event_deltas(&b);
         b.cost = cost;
         double tsum = 0.0;
         for (size_t p = 0; p < n; p++) {

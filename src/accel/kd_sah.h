@@ -125,6 +125,10 @@ typedef struct sah_tasks {
     double n_done, n_all; /* the primitives of the tasks built, and of all (progress) */
 } sah_tasks;
 
+typedef struct ev_delta {
+    double ts, te, mb, ma; /* see kd_sah_event_deltas */
+} ev_delta;
+
 typedef struct sah_build {
     kd_tree *t;
     const bsp_scene *scene;
@@ -149,6 +153,9 @@ typedef struct sah_build {
     int cost_mode;      /* COST_*: how an event finds its T_i */
     double unif;        /* COST_UNIFORM: the T_i of every primitive */
     double class_cost[8]; /* COST_CLASS: T_i by the class in event bits 28..30 */
+    /* COST_UNIFORM and COST_CLASS: what an event does to the sweep's sums,
+     * by its bits 28..31 (type and class; kd_sah_event_deltas) */
+    ev_delta delta[16];
     uint8_t *pclass;    /* COST_CLASS: the class per primitive */
     double *cost;       /* T_i per primitive (NULL when uniform), quantized */
     int linear;         /* every T_i >= mb_hit: the fast sweep's linear cost applies */
@@ -200,6 +207,23 @@ static inline int split_choice_same(const split_choice *a, const split_choice *b
     return a->found == b->found &&
            (!a->found || (a->axis == b->axis && a->pos == b->pos &&
                           memcmp(&a->cost, &b->cost, sizeof a->cost) == 0));
+}
+
+/* The sums' changes at an event of the given type and T_i (ev_t's units),
+ * as lin_step applies them: before its candidate the right sum loses TE and
+ * the count NL + NR loses MB (an END leaves the right side), after it the
+ * left sum gains TS and the count MA (a START joins the left side). With the
+ * cost classes in the key, a table of these by bits 28..31 replaces the
+ * per-event arithmetic of the type and the class look-up; the values are
+ * the same doubles that arithmetic gives. */
+static inline void kd_sah_event_deltas(sah_build *b)
+{
+    for (unsigned i = 0; i < 16; i++) {
+        const int start = (int)(i >> 3);
+        const double t = b->cost_mode == COST_CLASS ? b->class_cost[i & 7] : 1.0;
+        b->delta[i] = (ev_delta){start ? t : 0.0, start ? 0.0 : t, start ? 0.0 : 1.0,
+                                 start ? 1.0 : 0.0};
+    }
 }
 
 static inline double ev_cost(const sah_build *b, uint64_t x, int mode)

@@ -779,6 +779,7 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
             tsum += tp;
             tmin = tp < tmin ? tp : tmin;
         }
+    kd_sah_event_deltas(&b);
     b.linear = !b.mailbox || tmin >= b.mb_hit;
     b.min_saving = b.min_saving_sure = n > 0 ? cm.min_saving * tsum / (double)n : 0.0;
     b.inv_root_area = 1.0 / kd_surface_area(&t->box);

@@ -80,13 +80,25 @@ lin_step(const sah_build *b, uint64_t x, double p, double lo, double hi, double 
          double mbw, double w0, double *tl, double *tr, double *mc, const int mode,
          const int mailbox)
 {
-    const int start = (int)((x >> 31) & 1);
-    const double t = ev_t(b, x, mode);
-    const double ts = t * (double)start, te = t - ts; /* arithmetic, not a branch */
+    double ts, te, mb = 0.0, ma = 0.0;
+    if (mode != COST_ARRAY) { /* the table of the type and class bits */
+        const ev_delta *d = &b->delta[(x >> EV_CLASS_SHIFT) & 15];
+        ts = d->ts;
+        te = d->te;
+        mb = d->mb;
+        ma = d->ma;
+    } else {
+        const int start = (int)((x >> 31) & 1);
+        const double t = ev_t(b, x, mode);
+        ts = t * (double)start; /* arithmetic, not a branch */
+        te = t - ts;
+        mb = (double)(start ^ 1);
+        ma = (double)start;
+    }
     *tr -= te;
     double w;
     if (mailbox && mode != COST_UNIFORM) {
-        *mc -= (double)(start ^ 1);
+        *mc -= mb;
         w = mbw * *mc;
     } else {
         w = mailbox ? mbw * (*tl + *tr) : *tl + *tr;
@@ -94,7 +106,7 @@ lin_step(const sah_build *b, uint64_t x, double p, double lo, double hi, double 
     const double g = perim * ((p - lo) * *tl + (hi - p) * *tr) + cross * (w + w0);
     *tl += ts;
     if (mailbox && mode != COST_UNIFORM)
-        *mc += (double)start;
+        *mc += ma;
     return g;
 }
 
