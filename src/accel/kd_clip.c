@@ -43,8 +43,11 @@ void kd_clip_scratch_free(kd_clip_scratch *scr)
 /* Clips the closed polygon IN[0..N) to x[k] >= c (ABOVE) or x[k] <= c;
  * writes at most 2N vertices to OUT and returns their count. Coordinates are
  * kept in locals and written whole (writing one component of a vertex just
- * copied through memory stalls the next read of it). */
-static size_t clip_plane(const bsp_vec3 *in, size_t n, bsp_vec3 *out, int k, double c, int above)
+ * copied through memory stalls the next read of it). Inlined with K and
+ * ABOVE constant (clip_plane): the plane's coordinate is then a fixed
+ * register, not a selection per vertex. */
+static inline __attribute__((always_inline)) size_t
+clip_plane_k(const bsp_vec3 *in, size_t n, bsp_vec3 *out, const int k, double c, const int above)
 {
     size_t m = 0;
     const double sgn = above ? 1.0 : -1.0; /* c - x = -(x - c) exactly */
@@ -69,6 +72,99 @@ static size_t clip_plane(const bsp_vec3 *in, size_t n, bsp_vec3 *out, int k, dou
         da = db;
     }
     return m;
+}
+
+static size_t clip_plane(const bsp_vec3 *in, size_t n, bsp_vec3 *out, int k, double c, int above)
+{
+    switch (k * 2 + !!above) {
+    case 0: return clip_plane_k(in, n, out, 0, c, 0);
+    case 1: return clip_plane_k(in, n, out, 0, c, 1);
+    case 2: return clip_plane_k(in, n, out, 1, c, 0);
+    case 3: return clip_plane_k(in, n, out, 1, c, 1);
+    case 4: return clip_plane_k(in, n, out, 2, c, 0);
+    default: return clip_plane_k(in, n, out, 2, c, 1);
+    }
+}
+
+/* Adds the point (X, Y, Z) to the bounds LO, HI, as box_add_point does
+ * (the same comparisons, so the same bits, zeros' signs included). */
+static inline __attribute__((always_inline)) void add_point(double lo[3], double hi[3], double x,
+                                                            double y, double z)
+{
+    lo[0] = lo[0] < x ? lo[0] : x;
+    lo[1] = lo[1] < y ? lo[1] : y;
+    lo[2] = lo[2] < z ? lo[2] : z;
+    hi[0] = hi[0] > x ? hi[0] : x;
+    hi[1] = hi[1] > y ? hi[1] : y;
+    hi[2] = hi[2] > z ? hi[2] : z;
+}
+
+/* One edge A-B of clip_plane_k's loop for one side (DA, DB: the signed
+ * distances of A and B, kept side >= 0), as bounds: adds the crossing with
+ * the plane x[K] = C and B when kept; returns how many points it added. */
+static inline __attribute__((always_inline)) size_t
+side_points(double lo[3], double hi[3], double da, double db, double ax, double ay, double az,
+            double bx, double by, double bz, const int k, double c)
+{
+    size_t m = 0;
+    if ((da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0)) {
+        double t = da / (da - db);
+        double px = ax + (bx - ax) * t, py = ay + (by - ay) * t, pz = az + (bz - az) * t;
+        add_point(lo, hi, k == 0 ? c : px, k == 1 ? c : py, k == 2 ? c : pz);
+        m++;
+    }
+    if (db >= 0.0) {
+        add_point(lo, hi, bx, by, bz);
+        m++;
+    }
+    return m;
+}
+
+/* The bounds of polygon IN[0..N) clipped to x[k] <= CL (side 0) and to
+ * x[k] >= CR (side 1), in one pass and without writing a vertex: each side
+ * sees the points clip_plane(IN, N, ., K, C, ABOVE) would output, in its
+ * order and by the same arithmetic (its sign -1 is a negation, exact), so
+ * its bounds are box_add_point's over that output bit for bit. M[c]: the
+ * count of those points (0: the side is empty). */
+static inline __attribute__((always_inline)) void
+split_bounds_k(const bsp_vec3 *in, size_t n, const int k, double cl, double cr, bsp_box out[2],
+               size_t m[2])
+{
+    double lo[2][3], hi[2][3];
+    for (int c = 0; c < 2; c++)
+        for (int j = 0; j < 3; j++) {
+            lo[c][j] = INFINITY;
+            hi[c][j] = -INFINITY;
+        }
+    size_t ml = 0, mr = 0;
+    double ax = in[n - 1].x, ay = in[n - 1].y, az = in[n - 1].z;
+    double dal = -(in[n - 1].v[k] - cl), dar = in[n - 1].v[k] - cr;
+    for (size_t i = 0; i < n; i++) {
+        const double bx = in[i].x, by = in[i].y, bz = in[i].z;
+        const double dbl = -(in[i].v[k] - cl), dbr = in[i].v[k] - cr;
+        ml += side_points(lo[0], hi[0], dal, dbl, ax, ay, az, bx, by, bz, k, cl);
+        mr += side_points(lo[1], hi[1], dar, dbr, ax, ay, az, bx, by, bz, k, cr);
+        ax = bx;
+        ay = by;
+        az = bz;
+        dal = dbl;
+        dar = dbr;
+    }
+    for (int c = 0; c < 2; c++)
+        out[c] = (bsp_box){bsp_v3(lo[c][0], lo[c][1], lo[c][2]),
+                           bsp_v3(hi[c][0], hi[c][1], hi[c][2])};
+    m[0] = ml;
+    m[1] = mr;
+}
+
+static void split_bounds(const bsp_vec3 *in, size_t n, unsigned k, double cl, double cr,
+                         bsp_box out[2], size_t m[2])
+{
+    switch (k) {
+    case 0: split_bounds_k(in, n, 0, cl, cr, out, m); break;
+    case 1: split_bounds_k(in, n, 1, cl, cr, out, m); break;
+    default: split_bounds_k(in, n, 2, cl, cr, out, m); break;
+    }
 }
 
 #define STACK_VERTS 32
@@ -412,7 +508,7 @@ int kd_clip_prim_bounded(const bsp_scene *scene, uint32_t prim, bsp_box pb, cons
 static int clip_triangle_split(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g, unsigned axis,
                                double s, double pad, bsp_box out[2])
 {
-    bsp_vec3 par[12], side[24];
+    bsp_vec3 par[12];
     bsp_box pc;
     size_t n = 3;
     const bsp_vec3 *cur = v;
@@ -426,29 +522,35 @@ static int clip_triangle_split(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g
     } else {
         pc = pb; /* not clipped: inside G */
     }
+    /* the children's boxes differ from G only on AXIS: hi s + pad on the left, lo s - pad on
+     * the right */
+    const double cl = s + pad, cr = s - pad;
+    bsp_box sb[2];
+    size_t sm[2];
+    int split_done = 0;
     int got = 0;
     for (int c = 0; c < 2; c++) {
         bsp_box gc = *g;
         if (c == 0)
-            gc.hi.v[axis] = s + pad;
+            gc.hi.v[axis] = cl;
         else
-            gc.lo.v[axis] = s - pad;
+            gc.lo.v[axis] = cr;
         if (box_inside(pb, &gc)) {
             out[c] = box_grow(pb, pad);
             got |= 1 << c;
             continue;
         }
         bsp_box b;
-        if (c == 0 ? pc.hi.v[axis] <= gc.hi.v[axis] : pc.lo.v[axis] >= gc.lo.v[axis]) {
+        if (c == 0 ? pc.hi.v[axis] <= cl : pc.lo.v[axis] >= cr) {
             b = pc; /* the clipped part lies on this side */
         } else {
-            size_t m = clip_plane(cur, n, side, (int)axis, c == 0 ? gc.hi.v[axis] : gc.lo.v[axis],
-                                  c == 1);
-            if (m == 0)
+            if (!split_done) {
+                split_bounds(cur, n, axis, cl, cr, sb, sm);
+                split_done = 1;
+            }
+            if (sm[c] == 0)
                 continue;
-            b = box_empty();
-            for (size_t i = 0; i < m; i++)
-                b = box_add_point(b, side[i]);
+            b = sb[c];
         }
         if (finish(b, pb, &gc, pad, &out[c]) == 1)
             got |= 1 << c;
