@@ -47,9 +47,11 @@ static double rays_cost(const bsp_accel *a, const bsp_ray *rays, const uint8_t *
             (void)bsp_intersect_from(a, q, &rays[i], from[i], &h);
     }
     const bsp_query_counters *c = bsp_query_get_counters(q);
-    double cost = cm->c.traversal * (double)c->traversal_steps + t_mean * (double)c->isect_tests;
-    if (cm->mailbox_term)
-        cost += cm->mailbox_hit * (double)c->mailbox_hits;
+    /* every entry not tested costs its look-up (a stamp, or a compare without
+     * mailboxes), whatever model built the tree: --straddle twice changes the
+     * builder's charge, not the traversal's work */
+    double cost = cm->c.traversal * (double)c->traversal_steps + t_mean * (double)c->isect_tests +
+                  cm->mailbox_hit * (double)c->mailbox_hits;
     bsp_query_destroy(q);
     return n ? cost / (double)n : 0.0;
 }
