@@ -301,6 +301,50 @@ static inline double node_min_saving(const sah_build *b, int bad)
     return bad ? b->min_saving : b->min_saving_sure;
 }
 
+/* The one-sided primitives' counts and cost sums of a split (step 2 of
+ * kd_sah_build_node). */
+typedef struct classify_counts {
+    size_t n_lonly, n_ronly;
+    double t_lonly, t_ronly;
+} classify_counts;
+
+/* Step 2 of kd_sah_build_node over the split axis's events E[0..M), the
+ * first SPLIT_I of them below the split key: inlined with MODE constant, so
+ * that each cost mode's loops have no test of it. */
+static inline __attribute__((always_inline)) void
+classify(sah_build *b, const uint64_t *e, size_t split_i, size_t m, classify_counts *cc,
+         const int mode)
+{
+    uint8_t *cls = b->cls;
+    const uint32_t spare = b->spare;
+    size_t n_lonly = 0, n_ronly = 0;
+    double t_lonly = 0.0, t_ronly = 0.0;
+    for (size_t i = 0; i < split_i; i++) {
+        uint64_t x = e[i];
+        size_t start = (size_t)(x >> 31) & 1;
+        cls[ev_prim(x)] = start ? CLS_BOTH : CLS_LEFT;
+        n_lonly += start ^ 1;
+        if (mode == COST_CLASS) /* the table's TE: T_i for an END, else 0 */
+            t_lonly += b->delta[(x >> EV_CLASS_SHIFT) & 15].te;
+        else if (mode != COST_UNIFORM)
+            t_lonly += ev_cost(b, x, mode) * (double)(start ^ 1); /* not a branch */
+    }
+    for (size_t i = split_i; i < m; i++) {
+        uint64_t x = e[i];
+        size_t start = (size_t)(x >> 31) & 1;
+        cls[start ? ev_prim(x) : spare] = CLS_RIGHT;
+        n_ronly += start;
+        if (mode == COST_CLASS) /* the table's TS: T_i for a START, else 0 */
+            t_ronly += b->delta[(x >> EV_CLASS_SHIFT) & 15].ts;
+        else if (mode != COST_UNIFORM)
+            t_ronly += ev_cost(b, x, mode) * (double)start;
+    }
+    cc->n_lonly = n_lonly;
+    cc->n_ronly = n_ronly;
+    cc->t_lonly = t_lonly;
+    cc->t_ronly = t_ronly;
+}
+
 /* Builds the subtree of NODE over CELL from the lists L; ev[top, ...) is
  * free. *COST_OUT: the subtree's cost under the model (for retraction).
  * SURFACE: measure by the surface area. A view measure (sah-per, sah-par)
@@ -385,25 +429,16 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
                 hi = mid;
         }
         const size_t split_i = lo;
-        uint8_t *cls = b->cls;
-        const uint32_t spare = b->spare;
-        const int mode = b->cost_mode;
-        for (size_t i = 0; i < split_i; i++) {
-            uint64_t x = e[i];
-            size_t start = (size_t)(x >> 31) & 1;
-            cls[ev_prim(x)] = start ? CLS_BOTH : CLS_LEFT;
-            n_lonly += start ^ 1;
-            if (mode != COST_UNIFORM)
-                t_lonly += ev_cost(b, x, mode) * (double)(start ^ 1); /* not a branch */
+        classify_counts cc = {0, 0, 0.0, 0.0};
+        switch (b->cost_mode) {
+        case COST_UNIFORM: classify(b, e, split_i, m, &cc, COST_UNIFORM); break;
+        case COST_CLASS: classify(b, e, split_i, m, &cc, COST_CLASS); break;
+        default: classify(b, e, split_i, m, &cc, COST_ARRAY); break;
         }
-        for (size_t i = split_i; i < m; i++) {
-            uint64_t x = e[i];
-            size_t start = (size_t)(x >> 31) & 1;
-            cls[start ? ev_prim(x) : spare] = CLS_RIGHT;
-            n_ronly += start;
-            if (mode != COST_UNIFORM)
-                t_ronly += ev_cost(b, x, mode) * (double)start;
-        }
+        n_lonly = cc.n_lonly;
+        n_ronly = cc.n_ronly;
+        t_lonly = cc.t_lonly;
+        t_ronly = cc.t_ronly;
     }
     const size_t ns = n - n_lonly - n_ronly;
 

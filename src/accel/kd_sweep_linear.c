@@ -192,11 +192,18 @@ lin_node(sah_build *b, const uint64_t *ev, size_t stride, size_t n, double tsum,
             if (ev_pos(x) > A->lo)
                 break;
             int start = (int)((x >> 31) & 1);
-            double t = ev_t(b, x, mode);
             nl += (size_t)start;
-            tl += start ? t : 0.0;
-            tr += start ? 0.0 : t; /* subtracted below from the right sum */
-            mc += start ? 1.0 : -1.0;
+            if (mode != COST_ARRAY) { /* the table: the same terms */
+                const ev_delta *d = &b->delta[(x >> EV_CLASS_SHIFT) & 15];
+                tl += d->ts;
+                tr += d->te; /* subtracted below from the right sum */
+                mc += d->ma - d->mb;
+            } else {
+                double t = ev_t(b, x, mode);
+                tl += start ? t : 0.0;
+                tr += start ? 0.0 : t;
+                mc += start ? 1.0 : -1.0;
+            }
         }
         A->tl0 = tl;
         A->mc0 = mc;
@@ -250,15 +257,25 @@ lin_node(sah_build *b, const uint64_t *ev, size_t stride, size_t n, double tsum,
                 size_t from = A->a + j * SWEEP_CHUNK;
                 size_t to = from + SWEEP_CHUNK < A->z ? from + SWEEP_CHUNK : A->z;
                 double ts = 0.0, te = 0.0, ns = 0.0;
-                for (size_t i = from; i < to; i++) {
-                    uint64_t x = A->e[i];
-                    int start = (int)((x >> 31) & 1);
-                    double t = ev_t(b, x, mode);
-                    /* arithmetic, not a branch: START or END is unpredictable */
-                    double sf = (double)start, tsx = t * sf;
-                    ts += tsx;
-                    te += t - tsx;
-                    ns += sf;
+                if (mode != COST_ARRAY) {
+                    /* the table's entries are the very terms below: the same sums */
+                    for (size_t i = from; i < to; i++) {
+                        const ev_delta *d = &b->delta[(A->e[i] >> EV_CLASS_SHIFT) & 15];
+                        ts += d->ts;
+                        te += d->te;
+                        ns += d->ma;
+                    }
+                } else {
+                    for (size_t i = from; i < to; i++) {
+                        uint64_t x = A->e[i];
+                        int start = (int)((x >> 31) & 1);
+                        double t = ev_t(b, x, mode);
+                        /* arithmetic, not a branch: START or END is unpredictable */
+                        double sf = (double)start, tsx = t * sf;
+                        ts += tsx;
+                        te += t - tsx;
+                        ns += sf;
+                    }
                 }
                 double ne = (double)(to - from) - ns;
                 c[j].tl = st.tl;
@@ -370,11 +387,18 @@ lin_node_small(const sah_build *b, const uint64_t *ev, size_t stride, size_t n, 
             if (ev_pos(x) > lo)
                 break;
             const int start = (int)((x >> 31) & 1);
-            const double t = ev_t(b, x, mode);
             bonus_next &= start ^ 1;
-            tl += start ? t : 0.0;
-            tr -= start ? 0.0 : t;
-            mc += start ? 1.0 : -1.0;
+            if (mode != COST_ARRAY) { /* the table: the same terms */
+                const ev_delta *d = &b->delta[(x >> EV_CLASS_SHIFT) & 15];
+                tl += d->ts;
+                tr -= d->te;
+                mc += d->ma - d->mb;
+            } else {
+                const double t = ev_t(b, x, mode);
+                tl += start ? t : 0.0;
+                tr -= start ? 0.0 : t;
+                mc += start ? 1.0 : -1.0;
+            }
         }
         for (; i < m; i++) {
             const uint64_t x = e[i];
