@@ -304,6 +304,8 @@ static inline double node_min_saving(const sah_build *b, int bad)
 /* The one-sided primitives' counts and cost sums of a split (step 2 of
  * kd_sah_build_node). */
 typedef struct classify_counts {
+    size_t n_cand; /* b->list[0..n_cand): the primitives that start below the key,
+                      the straddlers among them */
     size_t n_lonly, n_ronly;
     double t_lonly, t_ronly;
 } classify_counts;
@@ -317,18 +319,23 @@ classify(sah_build *b, const uint64_t *e, size_t split_i, size_t m, classify_cou
 {
     uint8_t *cls = b->cls;
     const uint32_t spare = b->spare;
-    size_t n_lonly = 0, n_ronly = 0;
+    uint32_t *cand = b->list; /* room for one more than the STARTs below the key */
+    size_t n_lonly = 0, n_ronly = 0, nc = 0;
     double t_lonly = 0.0, t_ronly = 0.0;
+#pragma GCC unroll 4
     for (size_t i = 0; i < split_i; i++) {
         uint64_t x = e[i];
         size_t start = (size_t)(x >> 31) & 1;
         cls[ev_prim(x)] = start ? CLS_BOTH : CLS_LEFT;
+        cand[nc] = ev_prim(x); /* every straddler starts below the key */
+        nc += start;
         n_lonly += start ^ 1;
         if (mode == COST_CLASS) /* the table's TE: T_i for an END, else 0 */
             t_lonly += b->delta[(x >> EV_CLASS_SHIFT) & 15].te;
         else if (mode != COST_UNIFORM)
             t_lonly += ev_cost(b, x, mode) * (double)(start ^ 1); /* not a branch */
     }
+#pragma GCC unroll 4
     for (size_t i = split_i; i < m; i++) {
         uint64_t x = e[i];
         size_t start = (size_t)(x >> 31) & 1;
@@ -339,6 +346,7 @@ classify(sah_build *b, const uint64_t *e, size_t split_i, size_t m, classify_cou
         else if (mode != COST_UNIFORM)
             t_ronly += ev_cost(b, x, mode) * (double)start;
     }
+    cc->n_cand = nc;
     cc->n_lonly = n_lonly;
     cc->n_ronly = n_ronly;
     cc->t_lonly = t_lonly;
@@ -415,7 +423,7 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
      * way. */
     const unsigned axis = best.axis;
     const double s = (double)best.pos;
-    size_t n_lonly = 0, n_ronly = 0;
+    size_t n_lonly = 0, n_ronly = 0, n_cand = 0;
     double t_lonly = 0.0, t_ronly = 0.0;
     {
         const uint64_t *e = b->ev + L.base + axis * L.stride;
@@ -429,12 +437,15 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
                 hi = mid;
         }
         const size_t split_i = lo;
-        classify_counts cc = {0, 0, 0.0, 0.0};
+        classify_counts cc = {0, 0, 0, 0.0, 0.0};
+        if (!grow_list(b, n + 1))
+            return oom(b);
         switch (b->cost_mode) {
         case COST_UNIFORM: classify(b, e, split_i, m, &cc, COST_UNIFORM); break;
         case COST_CLASS: classify(b, e, split_i, m, &cc, COST_CLASS); break;
         default: classify(b, e, split_i, m, &cc, COST_ARRAY); break;
         }
+        n_cand = cc.n_cand;
         n_lonly = cc.n_lonly;
         n_ronly = cc.n_ronly;
         t_lonly = cc.t_lonly;
@@ -444,7 +455,7 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
 
     /* 3. the one-sided events, in one pass per axis: right ones compacted
      * above TOP, left ones in place (CLS_LEFT and CLS_RIGHT are one bit
-     * each; the straddlers, CLS_BOTH = 0, are gathered from axis 0's STARTs) */
+     * each; the straddlers, CLS_BOTH = 0, come from step 2's candidates) */
     bsp_box lcell = cell, rcell = cell;
     lcell.hi.v[axis] = rcell.lo.v[axis] = s;
     node_lists LL = {L.base, L.stride, 0, 0.0}, RL = {L.base, L.stride, 0, 0.0};
@@ -460,36 +471,30 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
         RL.stride = 2 * (n_ronly + ns);
         free_top = top + 3 * RL.stride;
         /* + 1: the branch-free loops below store one event past the last */
-        if (!grow_u64(&b->ev, &b->cap, free_top + 1) || !grow_list(b, n + 1))
+        if (!grow_u64(&b->ev, &b->cap, free_top + 1))
             return oom(b);
         const uint8_t *cls = b->cls;
+        /* the straddlers: the candidates of step 2 that stayed BOTH, in the
+         * split axis's order */
         uint32_t *strad = b->list;
         size_t nsg = 0;
+        for (size_t i = 0; i < n_cand; i++) {
+            uint32_t p = strad[i];
+            strad[nsg] = p;
+            nsg += cls[p] == CLS_BOTH;
+        }
         for (unsigned k = 0; k < 3; k++) {
             uint64_t *src = b->ev + L.base + k * L.stride; /* left: in place, a <= i */
             uint64_t *dst = b->ev + RL.base + k * RL.stride;
             size_t a = 0, o = 0;
-            if (k == 0) {
-                for (size_t i = 0; i < m; i++) {
-                    uint64_t x = src[i];
-                    uint32_t p = ev_prim(x);
-                    unsigned c = cls[p];
-                    src[a] = x;
-                    a += c & CLS_LEFT;
-                    dst[o] = x;
-                    o += c >> 1;
-                    strad[nsg] = p;
-                    nsg += (c == CLS_BOTH) & (size_t)((x >> 31) & 1);
-                }
-            } else {
-                for (size_t i = 0; i < m; i++) {
-                    uint64_t x = src[i];
-                    unsigned c = cls[ev_prim(x)];
-                    src[a] = x;
-                    a += c & CLS_LEFT;
-                    dst[o] = x;
-                    o += c >> 1;
-                }
+#pragma GCC unroll 4
+            for (size_t i = 0; i < m; i++) {
+                uint64_t x = src[i];
+                unsigned c = cls[ev_prim(x)];
+                src[a] = x;
+                a += c & CLS_LEFT;
+                dst[o] = x;
+                o += c >> 1;
             }
         }
 

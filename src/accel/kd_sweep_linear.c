@@ -121,6 +121,7 @@ lin_run(const sah_build *b, const lin_axis *ax, const lin_model *lm, size_t from
     const double w0 = lm->w0, mbw = lm->mbw;
     double tl = st->tl, tr = st->tr, mc = st->mc, best = *bg;
     size_t best_i = *bi;
+#pragma GCC unroll 4
     for (size_t i = from; i < to; i++) {
         const uint64_t x = e[i];
         double g = lin_step(b, x, ev_pos(x), lo, hi, perim, cross, mbw, w0, &tl, &tr, &mc, mode,
@@ -259,6 +260,7 @@ lin_node(sah_build *b, const uint64_t *ev, size_t stride, size_t n, double tsum,
                 double ts = 0.0, te = 0.0, ns = 0.0;
                 if (mode != COST_ARRAY) {
                     /* the table's entries are the very terms below: the same sums */
+#pragma GCC unroll 4
                     for (size_t i = from; i < to; i++) {
                         const ev_delta *d = &b->delta[(A->e[i] >> EV_CLASS_SHIFT) & 15];
                         ts += d->ts;
