@@ -238,9 +238,27 @@ static int clip_polygon(const bsp_vec3 *vs, size_t n, bsp_box pb, const bsp_box 
     return result;
 }
 
+/* One plane of clip_triangle_into (K, ABOVE constant): clips *CUR[0..*N) to
+ * x[K] >= C (ABOVE) or x[K] <= C when PB crosses it, ping-ponging between
+ * OUT and BUF; 0 when nothing is left. */
+static inline __attribute__((always_inline)) int
+triangle_plane(const bsp_vec3 **cur, size_t *n, bsp_vec3 *out, bsp_vec3 *buf, const bsp_box *pb,
+               const bsp_box *g, const int k, const int above, int *clipped)
+{
+    const double c = above ? g->lo.v[k] : g->hi.v[k];
+    if (above ? !(pb->lo.v[k] < c) : !(pb->hi.v[k] > c))
+        return 1;
+    bsp_vec3 *dst = (*cur == out) ? buf : out;
+    *n = clip_plane_k(*cur, *n, dst, k, c, above);
+    *cur = dst;
+    *clipped = 1;
+    return *n != 0;
+}
+
 /* Clips triangle V (bounds PB) to G into OUT[0..*N) (at most 9 vertices):
  * returns 1 when it clipped, 0 with *N = 0 when nothing is left, 0 with
- * *N = 3 when no plane of G crosses PB (V itself is the part). */
+ * *N = 3 when no plane of G crosses PB (V itself is the part). The planes
+ * in the order x lo, x hi, y lo, y hi, z lo, z hi, each inlined. */
 static int clip_triangle_into(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g, bsp_vec3 out[12],
                               size_t *np)
 {
@@ -248,20 +266,14 @@ static int clip_triangle_into(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g,
     const bsp_vec3 *cur = v;
     size_t n = 3;
     int clipped = 0;
-    for (int pl = 0; pl < 6; pl++) {
-        int k = pl >> 1, above = !(pl & 1);
-        double c = above ? g->lo.v[k] : g->hi.v[k];
-        if (above ? !(pb.lo.v[k] < c) : !(pb.hi.v[k] > c))
-            continue;
-        /* ping-pong so that the last output lands in OUT */
-        bsp_vec3 *dst = (cur == out) ? buf : out;
-        n = clip_plane(cur, n, dst, k, c, above);
-        if (n == 0) {
-            *np = 0;
-            return 0;
-        }
-        cur = dst;
-        clipped = 1;
+    if (!triangle_plane(&cur, &n, out, buf, &pb, g, 0, 1, &clipped) ||
+        !triangle_plane(&cur, &n, out, buf, &pb, g, 0, 0, &clipped) ||
+        !triangle_plane(&cur, &n, out, buf, &pb, g, 1, 1, &clipped) ||
+        !triangle_plane(&cur, &n, out, buf, &pb, g, 1, 0, &clipped) ||
+        !triangle_plane(&cur, &n, out, buf, &pb, g, 2, 1, &clipped) ||
+        !triangle_plane(&cur, &n, out, buf, &pb, g, 2, 0, &clipped)) {
+        *np = 0;
+        return 0;
     }
     if (clipped && cur != out)
         for (size_t i = 0; i < n; i++)
