@@ -264,13 +264,17 @@ static void merge_back(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn)
         }
         return;
     }
+    /* branch-free: which list gives the next key is unpredictable */
     size_t o = a + nn;
-    while (nn > 0) {
-        if (a > 0 && dst[a - 1] > nw[nn - 1])
-            dst[--o] = dst[--a];
-        else
-            dst[--o] = nw[--nn];
+    while (nn > 0 && a > 0) {
+        const uint64_t x = dst[a - 1], y = nw[nn - 1];
+        const size_t from_old = x > y;
+        dst[--o] = from_old ? x : y;
+        a -= from_old;
+        nn -= from_old ^ 1;
     }
+    while (nn > 0)
+        dst[--o] = nw[--nn];
 }
 
 /* Whether a node over CELL (N primitives, cost sum TSUM, after BAD bad
