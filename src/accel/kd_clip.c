@@ -255,14 +255,21 @@ triangle_plane(const bsp_vec3 **cur, size_t *n, bsp_vec3 *out, bsp_vec3 *buf, co
     return *n != 0;
 }
 
-/* Clips triangle V (bounds PB) to G into OUT[0..*N) (at most 9 vertices):
+/* Vertices a triangle clipped by six planes can have as computed. Exactly a
+ * triangle ∩ box has at most 9; rounded, vertices within rounding of a plane
+ * can lie on alternating sides, and a plane then turns n vertices into at
+ * most 1.5 n (k kept, at most 2 min(k, n - k) crossings): 3, 4, 6, 9, 13,
+ * 19, 28. */
+#define TRI_CLIP_MAX 28
+
+/* Clips triangle V (bounds PB) to G into OUT[0..*N) (at most TRI_CLIP_MAX):
  * returns 1 when it clipped, 0 with *N = 0 when nothing is left, 0 with
  * *N = 3 when no plane of G crosses PB (V itself is the part). The planes
  * in the order x lo, x hi, y lo, y hi, z lo, z hi, each inlined. */
-static int clip_triangle_into(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g, bsp_vec3 out[12],
-                              size_t *np)
+static int clip_triangle_into(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g,
+                              bsp_vec3 out[TRI_CLIP_MAX], size_t *np)
 {
-    bsp_vec3 buf[12];
+    bsp_vec3 buf[TRI_CLIP_MAX];
     const bsp_vec3 *cur = v;
     size_t n = 3;
     int clipped = 0;
@@ -283,10 +290,10 @@ static int clip_triangle_into(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g,
 }
 
 /* Bounds of triangle V ∩ G into *B (PB: its unclipped bounds): the convex
- * case, at most 3 + 6 vertices, in fixed buffers. */
+ * case, in fixed buffers. */
 static int clip_triangle(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g, bsp_box *b)
 {
-    bsp_vec3 part[12];
+    bsp_vec3 part[TRI_CLIP_MAX];
     size_t n;
     int clipped = clip_triangle_into(v, pb, g, part, &n);
     if (n == 0)
@@ -520,7 +527,7 @@ int kd_clip_prim_bounded(const bsp_scene *scene, uint32_t prim, bsp_box pb, cons
 static int clip_triangle_split(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g, unsigned axis,
                                double s, double pad, bsp_box out[2])
 {
-    bsp_vec3 par[12];
+    bsp_vec3 par[TRI_CLIP_MAX];
     bsp_box pc;
     size_t n = 3;
     const bsp_vec3 *cur = v;
