@@ -356,12 +356,12 @@ static int clip_sphere(const sphere_shape *s, const bsp_box *g, bsp_box *b)
         return 0; /* the ball misses G */
     if (d2max < r2 * (1.0 - ROUND_SLACK))
         return 0; /* G lies inside the ball: the surface misses it */
+    const double q[3] = {gap[0] * gap[0], gap[1] * gap[1], gap[2] * gap[2]};
+    /* squared distance to G across the other two axes, summed in axis order */
+    const double d2o_of[3] = {q[1] + q[2], q[0] + q[2], q[0] + q[1]};
     for (int k = 0; k < 3; k++) {
         double c = s->center.v[k];
-        double d2o = 0.0; /* squared distance to G across the other two axes */
-        for (int j = 0; j < 3; j++)
-            if (j != k)
-                d2o += gap[j] * gap[j];
+        double d2o = d2o_of[k];
         double ext = reach(r2, s->radius, d2o);
         b->lo.v[k] = dmax(c - ext, g->lo.v[k]);
         b->hi.v[k] = dmin(c + ext, g->hi.v[k]);

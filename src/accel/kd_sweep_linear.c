@@ -413,11 +413,12 @@ lin_node_small(const sah_build *b, const uint64_t *ev, size_t stride, size_t n, 
                 g = lin_bonus(lm, g);
                 bonus_next = 0;
             }
-            if (g < bg) {
-                bg = g;
-                best_ev = x;
-                best_k = k;
-            }
+            /* masks, not a branch: whether a candidate is the best so far is
+             * data, not a pattern (the compiler turns selections into one) */
+            const uint64_t better = 0u - (uint64_t)(g < bg);
+            best_ev = (x & better) | (best_ev & ~better);
+            best_k = ((unsigned)better & k) | (~(unsigned)better & best_k);
+            bg = g < bg ? g : bg;
         }
     }
     if (bg < INFINITY) {
