@@ -238,6 +238,19 @@ static inline double ev_t(const sah_build *b, uint64_t x, int mode)
                                 : (double)b->cost[ev_prim(x)];
 }
 
+/* What event X adds to a sweep's sums (ev_t's units): kd_sah_event_deltas'
+ * table entry for its type and class bits, or with costs per primitive the
+ * same terms computed (T_i times the START bit, not a branch). */
+static inline __attribute__((always_inline)) ev_delta ev_terms(const sah_build *b, uint64_t x,
+                                                               const int mode)
+{
+    if (mode != COST_ARRAY)
+        return b->delta[(x >> EV_CLASS_SHIFT) & 15];
+    const int start = (int)((x >> 31) & 1);
+    const double t = ev_t(b, x, mode), ts = t * (double)start;
+    return (ev_delta){ts, t - ts, (double)(start ^ 1), (double)start};
+}
+
 static inline double ev_pos(uint64_t x)
 {
     return (double)key_float((uint32_t)(x >> 32));

@@ -334,10 +334,8 @@ classify(sah_build *b, const uint64_t *e, size_t split_i, size_t m, classify_cou
         cand[nc] = ev_prim(x); /* every straddler starts below the key */
         nc += start;
         n_lonly += start ^ 1;
-        if (mode == COST_CLASS) /* the table's TE: T_i for an END, else 0 */
-            t_lonly += b->delta[(x >> EV_CLASS_SHIFT) & 15].te;
-        else if (mode != COST_UNIFORM)
-            t_lonly += ev_cost(b, x, mode) * (double)(start ^ 1); /* not a branch */
+        if (mode != COST_UNIFORM) /* TE: T_i for an END, else 0 */
+            t_lonly += ev_terms(b, x, mode).te;
     }
 #pragma GCC unroll 4
     for (size_t i = split_i; i < m; i++) {
@@ -345,10 +343,8 @@ classify(sah_build *b, const uint64_t *e, size_t split_i, size_t m, classify_cou
         size_t start = (size_t)(x >> 31) & 1;
         cls[start ? ev_prim(x) : spare] = CLS_RIGHT;
         n_ronly += start;
-        if (mode == COST_CLASS) /* the table's TS: T_i for a START, else 0 */
-            t_ronly += b->delta[(x >> EV_CLASS_SHIFT) & 15].ts;
-        else if (mode != COST_UNIFORM)
-            t_ronly += ev_cost(b, x, mode) * (double)start;
+        if (mode != COST_UNIFORM) /* TS: T_i for a START, else 0 */
+            t_ronly += ev_terms(b, x, mode).ts;
     }
     cc->n_cand = nc;
     cc->n_lonly = n_lonly;

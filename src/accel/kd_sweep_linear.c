@@ -80,21 +80,8 @@ lin_step(const sah_build *b, uint64_t x, double p, double lo, double hi, double 
          double mbw, double w0, double *tl, double *tr, double *mc, const int mode,
          const int mailbox)
 {
-    double ts, te, mb = 0.0, ma = 0.0;
-    if (mode != COST_ARRAY) { /* the table of the type and class bits */
-        const ev_delta *d = &b->delta[(x >> EV_CLASS_SHIFT) & 15];
-        ts = d->ts;
-        te = d->te;
-        mb = d->mb;
-        ma = d->ma;
-    } else {
-        const int start = (int)((x >> 31) & 1);
-        const double t = ev_t(b, x, mode);
-        ts = t * (double)start; /* arithmetic, not a branch */
-        te = t - ts;
-        mb = (double)(start ^ 1);
-        ma = (double)start;
-    }
+    const ev_delta d = ev_terms(b, x, mode);
+    const double ts = d.ts, te = d.te, mb = d.mb, ma = d.ma;
     *tr -= te;
     double w;
     if (mailbox && mode != COST_UNIFORM) {
@@ -194,17 +181,10 @@ lin_node(sah_build *b, const uint64_t *ev, size_t stride, size_t n, double tsum,
                 break;
             int start = (int)((x >> 31) & 1);
             nl += (size_t)start;
-            if (mode != COST_ARRAY) { /* the table: the same terms */
-                const ev_delta *d = &b->delta[(x >> EV_CLASS_SHIFT) & 15];
-                tl += d->ts;
-                tr += d->te; /* subtracted below from the right sum */
-                mc += d->ma - d->mb;
-            } else {
-                double t = ev_t(b, x, mode);
-                tl += start ? t : 0.0;
-                tr += start ? 0.0 : t;
-                mc += start ? 1.0 : -1.0;
-            }
+            const ev_delta d = ev_terms(b, x, mode);
+            tl += d.ts;
+            tr += d.te; /* subtracted below from the right sum */
+            mc += d.ma - d.mb;
         }
         A->tl0 = tl;
         A->mc0 = mc;
@@ -258,26 +238,12 @@ lin_node(sah_build *b, const uint64_t *ev, size_t stride, size_t n, double tsum,
                 size_t from = A->a + j * SWEEP_CHUNK;
                 size_t to = from + SWEEP_CHUNK < A->z ? from + SWEEP_CHUNK : A->z;
                 double ts = 0.0, te = 0.0, ns = 0.0;
-                if (mode != COST_ARRAY) {
-                    /* the table's entries are the very terms below: the same sums */
 #pragma GCC unroll 4
-                    for (size_t i = from; i < to; i++) {
-                        const ev_delta *d = &b->delta[(A->e[i] >> EV_CLASS_SHIFT) & 15];
-                        ts += d->ts;
-                        te += d->te;
-                        ns += d->ma;
-                    }
-                } else {
-                    for (size_t i = from; i < to; i++) {
-                        uint64_t x = A->e[i];
-                        int start = (int)((x >> 31) & 1);
-                        double t = ev_t(b, x, mode);
-                        /* arithmetic, not a branch: START or END is unpredictable */
-                        double sf = (double)start, tsx = t * sf;
-                        ts += tsx;
-                        te += t - tsx;
-                        ns += sf;
-                    }
+                for (size_t i = from; i < to; i++) {
+                    const ev_delta d = ev_terms(b, A->e[i], mode);
+                    ts += d.ts;
+                    te += d.te;
+                    ns += d.ma;
                 }
                 double ne = (double)(to - from) - ns;
                 c[j].tl = st.tl;
@@ -390,17 +356,10 @@ lin_node_small(const sah_build *b, const uint64_t *ev, size_t stride, size_t n, 
                 break;
             const int start = (int)((x >> 31) & 1);
             bonus_next &= start ^ 1;
-            if (mode != COST_ARRAY) { /* the table: the same terms */
-                const ev_delta *d = &b->delta[(x >> EV_CLASS_SHIFT) & 15];
-                tl += d->ts;
-                tr -= d->te;
-                mc += d->ma - d->mb;
-            } else {
-                const double t = ev_t(b, x, mode);
-                tl += start ? t : 0.0;
-                tr -= start ? 0.0 : t;
-                mc += start ? 1.0 : -1.0;
-            }
+            const ev_delta d = ev_terms(b, x, mode);
+            tl += d.ts;
+            tr -= d.te;
+            mc += d.ma - d.mb;
         }
         for (; i < m; i++) {
             const uint64_t x = e[i];
