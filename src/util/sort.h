@@ -1,6 +1,6 @@
 /*
- * sort.h — an in-place sort of integer keys for the builders' arrays too
- * long for insertion sort: introsort (quicksort with a median-of-three
+ * sort.h — an in-place sort of keys ordered by `<` (integers, finite
+ * doubles) for the builders' arrays too long for insertion sort: introsort (quicksort with a median-of-three
  * pivot, insertion sort for parts of at most SMALL keys, heapsort past a
  * depth limit, so never worse than O(n log n)), without qsort's call per
  * comparison. DEFINE_SORT(NAME, T, SMALL) defines `static void NAME(T *a,
