@@ -1,11 +1,12 @@
 /*
  * sort.h — an in-place sort of keys ordered by `<` (integers, finite
- * doubles) for the builders' arrays too long for insertion sort: introsort (quicksort with a median-of-three
- * pivot, insertion sort for parts of at most SMALL keys, heapsort past a
- * depth limit, so never worse than O(n log n)), without qsort's call per
- * comparison. DEFINE_SORT(NAME, T, SMALL) defines `static void NAME(T *a,
- * size_t n)`, sorting ascending by `<` (not stable: for keys that are
- * distinct or need not be). SMALL >= 3 (the median of three needs it).
+ * doubles) for the builders' arrays too long for insertion sort: introsort
+ * (quicksort with a median-of-three pivot, insertion sort for parts of at
+ * most SMALL keys, heapsort past a depth limit, so never worse than
+ * O(n log n)), without qsort's call per comparison. DEFINE_SORT(NAME, T,
+ * SMALL) defines `static void NAME(T *a, size_t n)`, sorting ascending by
+ * `<` (not stable: for keys that are distinct or need not be). SMALL >= 3
+ * (the median of three needs it).
  */
 #ifndef BSPRAY_UTIL_SORT_H
 #define BSPRAY_UTIL_SORT_H
