@@ -1379,6 +1379,19 @@ TEST(kd_exact_subnormal_directions)
     bsp_scene_destroy(s);
 }
 
+/* Adds a random triangle in [-3, 3]^3 to S (every fifth TRIAL's lies in an
+ * axis plane) and returns its first vertex. */
+static bsp_vec3 add_random_triangle(bsp_scene *s, int trial)
+{
+    bsp_vec3 v[3];
+    for (int i = 0; i < 3; i++)
+        v[i] = bsp_v3(rnd_in(-3, 3), rnd_in(-3, 3), rnd_in(-3, 3));
+    if (trial % 5 == 0)
+        v[2].v[trial % 3] = v[1].v[trial % 3] = v[0].v[trial % 3]; /* in an axis plane */
+    add_tri(s, v[0], v[1], v[2]);
+    return v[0];
+}
+
 /* Clipping a straddler once for both children (kd_clip_prim_split) gives
  * what clipping it to each child does, up to rounding far below the
  * padding, and the same emptiness away from the borderline. */
@@ -1388,12 +1401,7 @@ TEST(sah_split_clip_matches_clipping_each_child)
     int trials = quick() ? 300 : 2000, both = 0;
     for (int trial = 0; trial < trials; trial++) {
         bsp_scene *s = bsp_scene_create();
-        bsp_vec3 v[3];
-        for (int i = 0; i < 3; i++)
-            v[i] = bsp_v3(rnd_in(-3, 3), rnd_in(-3, 3), rnd_in(-3, 3));
-        if (trial % 5 == 0)
-            v[2].v[trial % 3] = v[1].v[trial % 3] = v[0].v[trial % 3]; /* in an axis plane */
-        add_tri(s, v[0], v[1], v[2]);
+        const bsp_vec3 v0 = add_random_triangle(s, trial);
         add_sphere(s, bsp_v3(rnd_in(-3, 3), rnd_in(-3, 3), rnd_in(-3, 3)), rnd_in(0.1, 2));
         bsp_box cell;
         for (int k = 0; k < 3; k++) {
@@ -1404,7 +1412,7 @@ TEST(sah_split_clip_matches_clipping_each_child)
         unsigned axis = (unsigned)(trial % 3);
         double sp = cell.lo.v[axis] + rnd_in(0.05, 0.95) * (cell.hi.v[axis] - cell.lo.v[axis]);
         if (trial % 7 == 0)
-            sp = v[0].v[axis] > cell.lo.v[axis] && v[0].v[axis] < cell.hi.v[axis] ? v[0].v[axis]
+            sp = v0.v[axis] > cell.lo.v[axis] && v0.v[axis] < cell.hi.v[axis] ? v0.v[axis]
                                                                                   : sp;
         double pad = 1e-7 * 3;
         for (uint32_t prim = 0; prim < 2; prim++) {
@@ -1433,6 +1441,64 @@ TEST(sah_split_clip_matches_clipping_each_child)
         bsp_scene_destroy(s);
     }
     CHECK(both > trials / 20); /* straddlers were met */
+}
+
+/* A triangle's parts along a path (kd_clip_triangle_split_part, the
+ * builder's perfect splits of triangles): at every split of a random
+ * descent the bounds from the part clipped by the one plane are those of
+ * the triangle clipped afresh to each child (kd_clip_prim), up to rounding
+ * far below the padding, with the same emptiness; and the parts are kept
+ * and used, not dropped. */
+TEST(sah_triangle_parts_match_clipping_afresh)
+{
+    rng_state = 919;
+    int trials = quick() ? 100 : 600, used = 0, splits = 0;
+    for (int trial = 0; trial < trials; trial++) {
+        bsp_scene *s = bsp_scene_create();
+        add_random_triangle(s, trial);
+        const bsp_box pb = bsp_scene_prim_bounds(s, 0);
+        bsp_box cell = {bsp_v3(-2, -2.5, -3), bsp_v3(2.5, 3, 2)}; /* cuts most triangles */
+        const double pad = 1e-7 * 3;
+        kd_clip_path path;
+        memset(&path, 0, sizeof path);
+        uint64_t part = 0;
+        for (int depth = 0; depth < 30; depth++) {
+            unsigned axis = (unsigned)(rnd_in(0, 3)) % 3;
+            double lo = fmax(cell.lo.v[axis], pb.lo.v[axis]), hi = fmin(cell.hi.v[axis], pb.hi.v[axis]);
+            if (!(hi - lo > 1e-4))
+                break;
+            double sp = lo + rnd_in(0.1, 0.9) * (hi - lo); /* through the triangle's bounds */
+            bsp_box out[2];
+            uint64_t parts[2];
+            int got = kd_clip_triangle_split_part(s, 0, pb, &cell, axis, sp, pad, &path, part,
+                                                  out, parts);
+            REQUIRE(got >= 0);
+            splits++;
+            bsp_box child[2] = {cell, cell};
+            child[0].hi.v[axis] = child[1].lo.v[axis] = sp;
+            for (int c = 0; c < 2; c++) {
+                bsp_box one;
+                int r = kd_clip_prim(s, 0, &child[c], pad, NULL, &one);
+                REQUIRE(r >= 0);
+                CHECK_MSG((got >> c & 1) == r, "trial %d depth %d side %d: part %d, afresh %d",
+                          trial, depth, c, got >> c & 1, r);
+                if (r == 1 && (got >> c & 1))
+                    for (int k = 0; k < 3; k++) {
+                        CHECK(fabs(out[c].lo.v[k] - one.lo.v[k]) <= 1e-12);
+                        CHECK(fabs(out[c].hi.v[k] - one.hi.v[k]) <= 1e-12);
+                    }
+            }
+            if (!got)
+                break;
+            int c = (got == 3) ? (int)(rnd_in(0, 2)) % 2 : got - 1; /* a side it is in */
+            used += part != 0;
+            part = parts[c];
+            cell = child[c];
+        }
+        kd_clip_path_free(&path);
+        bsp_scene_destroy(s);
+    }
+    CHECK_MSG(used > splits / 4, "parts used at %d of %d splits", used, splits);
 }
 
 /* --- determinism, calibration, scaling -------------------------------------------------------------- */

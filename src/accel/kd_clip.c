@@ -15,9 +15,11 @@
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "accel/kd_clip.h"
 #include "geom/vec.h"
+#include "util/grow.h"
 
 /* NaN-free minimum and maximum (no libm call) */
 static inline double dmin(double a, double b)
@@ -600,6 +602,112 @@ int kd_clip_prim_split(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
         if (r < 0)
             return -1;
         got |= r << c;
+    }
+    return got;
+}
+
+/* --- triangles' parts along a build path ------------------------------------------------------ */
+
+void kd_clip_path_free(kd_clip_path *path)
+{
+    free(path->of);
+    free(path->v);
+    memset(path, 0, sizeof *path);
+}
+
+/* Room for MORE vertices above the path's top; 0 when out of memory. */
+static int path_reserve(kd_clip_path *path, size_t more)
+{
+    return GROW_ARRAY(path->v, path->cap, path->top + more);
+}
+
+/* The handle of the part whose M vertices lie at the path's top + 2, with
+ * its bounds B stored in the two slots before them (0 and nothing kept:
+ * more than KD_PART_MAX_VERTS; the child clips the triangle afresh). */
+static uint64_t path_keep(kd_clip_path *path, size_t m, bsp_box b)
+{
+    if (m > KD_PART_MAX_VERTS)
+        return 0;
+    path->v[path->top] = b.lo;
+    path->v[path->top + 1] = b.hi;
+    uint64_t h = ((uint64_t)path->top << 8) | m;
+    path->top += m + 2;
+    return h;
+}
+
+int kd_clip_triangle_split_part(const bsp_scene *scene, uint32_t prim, bsp_box pb,
+                                const bsp_box *cell, unsigned axis, double s, double pad,
+                                kd_clip_path *path, uint64_t part, bsp_box out[2],
+                                uint64_t parts[2])
+{
+    parts[0] = parts[1] = 0;
+    const bsp_box g = box_grow(*cell, pad);
+    if (box_is_empty(pb) || !box_meets(pb, &g))
+        return 0;
+    size_t n = part & 0xff;
+    /* room for the part (when it is made here) and both sides with their
+     * bounds: a plane at most doubles a polygon's vertices */
+    if (!path_reserve(path, part ? 4 * n + 4 : 5 * TRI_CLIP_MAX + 6))
+        return -1;
+    const bsp_vec3 *cur;
+    bsp_vec3 vs[3];
+    bsp_box pc;
+    if (part) {
+        const bsp_vec3 *at = path->v + (part >> 8);
+        pc = (bsp_box){at[0], at[1]};
+        cur = at + 2;
+    } else {
+        /* the triangle, clipped to G here (as kd_clip_prim_split does) and
+         * kept for the children when it was clipped */
+        const triangle_shape *tr = &scene->triangles[scene->prims[prim].slot];
+        vs[0] = tr->v0;
+        vs[1] = v3_add(tr->v0, tr->e1);
+        vs[2] = v3_add(tr->v0, tr->e2);
+        bsp_vec3 *dst = path->v + path->top + 2;
+        if (clip_triangle_into(vs, pb, &g, dst, &n)) {
+            cur = dst;
+            pc = box_empty();
+            for (size_t i = 0; i < n; i++)
+                pc = box_add_point(pc, cur[i]);
+            part = path_keep(path, n, pc);
+        } else if (n == 0) {
+            return 0;
+        } else {
+            cur = vs; /* inside G: the children see the triangle itself */
+            pc = pb;
+        }
+    }
+    const double cl = s + pad, cr = s - pad;
+    int got = 0;
+    for (int c = 0; c < 2; c++) {
+        bsp_box gc = g;
+        if (c == 0)
+            gc.hi.v[axis] = cl;
+        else
+            gc.lo.v[axis] = cr;
+        if (box_inside(pb, &gc)) {
+            out[c] = box_grow(pb, pad); /* the triangle lies inside the child: no part */
+            got |= 1 << c;
+            continue;
+        }
+        bsp_box b;
+        if (c == 0 ? pc.hi.v[axis] <= cl : pc.lo.v[axis] >= cr) {
+            b = pc; /* the part lies on this side: the child keeps it */
+            parts[c] = part;
+        } else {
+            bsp_vec3 *dst = path->v + path->top + 2;
+            size_t m = clip_plane(cur, n, dst, (int)axis, c == 0 ? cl : cr, c == 1);
+            if (m == 0)
+                continue;
+            b = box_empty();
+            for (size_t i = 0; i < m; i++)
+                b = box_add_point(b, dst[i]);
+            parts[c] = path_keep(path, m, b);
+        }
+        if (finish(b, pb, &gc, pad, &out[c]) == 1)
+            got |= 1 << c;
+        else
+            parts[c] = 0;
     }
     return got;
 }

@@ -243,9 +243,10 @@ static int run_tasks(sah_pool *pool, int only_probes, int report)
 {
     sah_build w = pool->proto;
     w.cls = calloc((size_t)w.spare + 1, 1);
+    w.path.of = calloc((size_t)w.spare + 1, sizeof *w.path.of); /* each task starts with none */
     if (w.descent) /* a measure context of its own */
         w.actx = w.dctx = w.descent->thread_ctx(w.shared_actx);
-    int ready = w.cls && (!w.descent || w.dctx); /* if not, the other threads take the tasks */
+    int ready = w.cls && w.path.of && (!w.descent || w.dctx); /* if not, the other threads take the tasks */
     sah_task *tk;
     while (ready && (tk = take_task(pool, only_probes)) != NULL) {
         run_task(&w, tk);
@@ -316,6 +317,9 @@ static sah_pool *pool_create(const sah_build *b, sah_tasks *ts)
     w->list = NULL;
     w->list_cap = 0;
     memset(&w->clip, 0, sizeof w->clip);
+    memset(&w->path, 0, sizeof w->path);
+    w->saved = NULL;
+    w->nsaved = w->saved_cap = 0;
     w->chunks = NULL;
     w->chunks_cap = 0;
     w->mruns = NULL;

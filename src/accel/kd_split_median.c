@@ -12,6 +12,7 @@
 #include <stdlib.h>
 
 #include "accel/kd_tree.h"
+#include "util/grow.h"
 
 typedef struct median_build {
     kd_tree *t;
@@ -23,15 +24,7 @@ typedef struct median_build {
 
 static int reserve(median_build *b, size_t need)
 {
-    if (need <= b->cap)
-        return 1;
-    size_t ncap = b->cap * 2 > need ? b->cap * 2 : need;
-    uint32_t *ns = realloc(b->scratch, ncap * sizeof *ns);
-    if (!ns)
-        return 0;
-    b->scratch = ns;
-    b->cap = ncap;
-    return 1;
+    return GROW_ARRAY(b->scratch, b->cap, need);
 }
 
 static bsp_status oom(median_build *b)

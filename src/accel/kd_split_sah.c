@@ -94,6 +94,7 @@
 
 #include "accel/kd_prune.h"
 #include "accel/kd_sah.h"
+#include "util/grow.h"
 #include "util/sort.h"
 
 #define MAX_BAD_REFINES 1
@@ -145,15 +146,7 @@ static bsp_status oom(sah_build *b)
 
 static int grow_list(sah_build *b, size_t need)
 {
-    if (need <= b->list_cap)
-        return 1;
-    size_t ncap = b->list_cap * 2 > need ? b->list_cap * 2 : need;
-    uint32_t *np = realloc(b->list, ncap * sizeof *np);
-    if (!np)
-        return 0;
-    b->list = np;
-    b->list_cap = ncap;
-    return 1;
+    return GROW_ARRAY(b->list, b->list_cap, need);
 }
 
 static int grow_nev(sah_build *b, size_t need)
@@ -223,6 +216,45 @@ static int clipped_events(const sah_build *b, uint32_t p, const bsp_box *cb, con
         out[k * stride + at + 1] = make_event(hi[k], 0, p) | cls;
     }
     return 1;
+}
+
+/* A straddling triangle's part in a split's cell and in each child
+ * (handles of b->path): set in b->path.of for the subtree being built,
+ * restored when the split's node returns. */
+struct part_save {
+    uint32_t prim;
+    uint64_t parent, child[2];
+};
+
+/* Clips straddler P of the split at S on AXIS of CELL to both children into
+ * CB (kd_clip_prim_split's result); a triangle from its part along the path,
+ * its children's parts saved for the subtrees (b->saved). */
+static int clip_straddler(sah_build *b, uint32_t p, const bsp_box *cell, unsigned axis, double s,
+                          bsp_box cb[2])
+{
+    if (!b->path.of || (shape_kind)b->scene->prims[p].shape != SHAPE_TRIANGLE)
+        return kd_clip_prim_split(b->scene, p, b->bounds[p], cell, axis, s, b->t->pad, &b->clip,
+                                  cb);
+    const uint64_t parent = b->path.of[p];
+    uint64_t parts[2];
+    int got = kd_clip_triangle_split_part(b->scene, p, b->bounds[p], cell, axis, s, b->t->pad,
+                                          &b->path, parent, cb, parts);
+    if (got > 0 && (parent | parts[0] | parts[1])) {
+        if (!GROW_ARRAY(b->saved, b->saved_cap, b->nsaved + 1))
+            return -1;
+        b->saved[b->nsaved++] = (struct part_save){p, parent, {parts[0], parts[1]}};
+    }
+    return got;
+}
+
+/* The parts of the saved straddlers [FROM, b->nsaved) for child C (0, 1),
+ * or their parent's (C = 2). */
+static void set_parts(sah_build *b, size_t from, int c)
+{
+    for (size_t i = from; i < b->nsaved; i++) {
+        const struct part_save *ps = &b->saved[i];
+        b->path.of[ps->prim] = c < 2 ? ps->child[c] : ps->parent;
+    }
 }
 
 /* Merges the sorted NEW[0..NN) into the sorted DST[0..A), in place from the
@@ -460,6 +492,9 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     lcell.hi.v[axis] = rcell.lo.v[axis] = s;
     node_lists LL = {L.base, L.stride, 0, 0.0}, RL = {L.base, L.stride, 0, 0.0};
     size_t free_top = top;
+    /* the straddlers' parts this split saves for its children (clip_straddler),
+     * and the path's vertex stack to pop to */
+    const size_t saved_from = b->nsaved, path_top = b->path.top;
     if (ns == 0 && n_ronly == 0) {
         LL.n = n; /* all left: the lists stay as they are */
         LL.tsum = tsum;
@@ -511,8 +546,7 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
                 uint32_t p = strad[i];
                 double tp = b->cost ? (double)b->cost[p] : 0.0;
                 bsp_box cb[2];
-                int got = kd_clip_prim_split(b->scene, p, b->bounds[p], &cell, axis, s, b->t->pad,
-                                             &b->clip, cb);
+                int got = clip_straddler(b, p, &cell, axis, s, cb);
                 if (got < 0) {
                     fail = 1;
                     break;
@@ -554,12 +588,17 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     kd_make_interior(t, node, axis, best.pos, child);
     size_t saved_prims = t->nprims;
     double cl, cr;
+    set_parts(b, saved_from, 0);
     bsp_status st =
         kd_sah_build_node(b, child, lcell, LL, free_top, depth + 1, bad + bad_here, surface, &cl);
+    set_parts(b, saved_from, 1);
     if (st == BSP_OK)
         st = kd_sah_build_node(b, child + 1, rcell, RL, free_top, depth + 1, bad + bad_here, surface, &cr);
     if (st != BSP_OK)
         return st;
+    set_parts(b, saved_from, 2);
+    b->nsaved = saved_from;
+    b->path.top = path_top;
     double ml = measure(b, &lcell, surface), mr = measure(b, &rcell, surface), save = 0.0;
     if (b->mailbox) { /* as in the sweep: the references duplicated by this split */
         double both = ml + mr - area;
@@ -670,12 +709,13 @@ static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n,
     kd_tree *t = b->t;
     b->min_saving_sure = b->min_saving;
     b->cls = calloc(np + 1, 1); /* + 1: the spare slot */
+    b->path.of = calloc(np + 1, sizeof *b->path.of); /* untouched pages cost nothing */
     /* the root's lists and two radix buffers (root_lists), then room: the
      * stack's peak was 12.7-19.8 n on the SPD scenes (balls:6 16.6 n); pages
      * never written cost nothing, a stack grown is copied */
     b->cap = 20 * n + 1024;
     b->ev = bigmem_malloc(b->cap * sizeof *b->ev);
-    if (!b->cls || !b->ev || (b->record_savings && !kd_tree_record_savings(t))) {
+    if (!b->cls || !b->path.of || !b->ev || (b->record_savings && !kd_tree_record_savings(t))) {
         kd_sah_scratch_free(b);
         return oom(b);
     }
@@ -871,6 +911,10 @@ void kd_sah_scratch_free(sah_build *b)
     free(b->chunks);
     free(b->mruns);
     kd_clip_scratch_free(&b->clip);
+    kd_clip_path_free(&b->path);
+    free(b->saved);
+    b->saved = NULL;
+    b->nsaved = b->saved_cap = 0;
     b->cls = NULL;
     b->ev = NULL;
     b->nev[0] = b->nev[1] = NULL;
