@@ -1443,21 +1443,77 @@ TEST(sah_split_clip_matches_clipping_each_child)
     CHECK(both > trials / 20); /* straddlers were met */
 }
 
-/* A triangle's parts along a path (kd_clip_triangle_split_part, the
- * builder's perfect splits of triangles): at every split of a random
- * descent the bounds from the part clipped by the one plane are those of
- * the triangle clipped afresh to each child (kd_clip_prim), up to rounding
- * far below the padding, with the same emptiness; and the parts are kept
- * and used, not dropped. */
-TEST(sah_triangle_parts_match_clipping_afresh)
+#define PI_TEST 3.14159265358979323846
+
+/* A random planar polygon of N vertices around the origin of [-3, 3]^3 in
+ * the plane spanned by the orthonormal U and W (made here): convex (on an
+ * ellipse) or a star (radii alternating, concave). R[i], TH[i]: vertex i's
+ * polar coordinates in that plane. */
+static void random_planar_polygon(bsp_vec3 *v, size_t n, int star, bsp_vec3 *u, bsp_vec3 *w,
+                                  double *r, double *th)
+{
+    bsp_vec3 a = bsp_v3(rnd_in(-1, 1), rnd_in(-1, 1), rnd_in(-1, 1));
+    bsp_vec3 b = bsp_v3(rnd_in(-1, 1), rnd_in(-1, 1), rnd_in(-1, 1));
+    *u = v3_scale(a, 1.0 / sqrt(v3_dot(a, a)));
+    b = v3_sub(b, v3_scale(*u, v3_dot(b, *u)));
+    *w = v3_scale(b, 1.0 / sqrt(v3_dot(b, b)));
+    const double ra = rnd_in(1, 3), rb = rnd_in(1, 3);
+    for (size_t i = 0; i < n; i++) {
+        th[i] = 2.0 * PI_TEST * ((double)i + rnd_in(0.1, 0.9)) / (double)n;
+        double c = cos(th[i]), sn = sin(th[i]);
+        double re = ra * rb / sqrt(rb * rb * c * c + ra * ra * sn * sn); /* the ellipse's */
+        r[i] = star && i % 2 ? re * rnd_in(0.1, 0.5) : re;
+        v[i] = v3_add(v3_scale(*u, r[i] * c), v3_scale(*w, r[i] * sn));
+    }
+}
+
+/* Whether the point at polar (RHO, PHI) lies inside the polygon of the
+ * polar vertices R, TH (even-odd, in the plane's coordinates). */
+static int inside_planar_polygon(const double *r, const double *th, size_t n, double rho,
+                                 double phi)
+{
+    double x = rho * cos(phi), y = rho * sin(phi);
+    int in = 0;
+    for (size_t i = 0, j = n - 1; i < n; j = i++) {
+        double xi = r[i] * cos(th[i]), yi = r[i] * sin(th[i]);
+        double xj = r[j] * cos(th[j]), yj = r[j] * sin(th[j]);
+        if ((yi > y) != (yj > y) && x < (xj - xi) * (y - yi) / (yj - yi) + xi)
+            in = !in;
+    }
+    return in;
+}
+
+/* Triangles' and polygons' parts along a path (kd_clip_split_part, the
+ * builder's perfect splits): at every split of a random descent, the
+ * bounds from the part clipped by the one plane are, for triangles and
+ * convex polygons, those of the primitive clipped afresh to each child
+ * (kd_clip_prim), up to rounding far below the padding, with the same
+ * emptiness. A concave polygon's bridges depend on the order of the planes,
+ * so there the bounds must hold every point of the polygon in the child
+ * (sampled; points inside the polygon by even-odd, inside the child cell),
+ * and a child the polygon meets (kd_polygon_meets_box, exact) must have it. The parts
+ * are kept and used, not dropped. */
+TEST(sah_parts_match_clipping_afresh)
 {
     rng_state = 919;
-    int trials = quick() ? 100 : 600, used = 0, splits = 0;
+    int trials = quick() ? 150 : 900, used = 0, splits = 0, sampled = 0;
+    kd_clip_scratch scr = {{NULL, NULL}, {0, 0}};
     for (int trial = 0; trial < trials; trial++) {
         bsp_scene *s = bsp_scene_create();
-        add_random_triangle(s, trial);
+        const int kind = trial % 3; /* 0: triangle, 1: convex polygon, 2: star */
+        bsp_vec3 u = bsp_v3(0, 0, 0), w = u, v[40];
+        double r[40], th[40];
+        size_t nv = 0;
+        if (kind == 0) {
+            add_random_triangle(s, trial);
+        } else {
+            nv = 4 + (size_t)(rnd_in(0, 36));
+            nv += kind == 2 && nv % 2; /* a star of whole points */
+            random_planar_polygon(v, nv, kind == 2, &u, &w, r, th);
+            add_poly(s, v, nv);
+        }
         const bsp_box pb = bsp_scene_prim_bounds(s, 0);
-        bsp_box cell = {bsp_v3(-2, -2.5, -3), bsp_v3(2.5, 3, 2)}; /* cuts most triangles */
+        bsp_box cell = {bsp_v3(-2, -2.5, -3), bsp_v3(2.5, 3, 2)}; /* cuts most of them */
         const double pad = 1e-7 * 3;
         kd_clip_path path;
         memset(&path, 0, sizeof path);
@@ -1467,26 +1523,45 @@ TEST(sah_triangle_parts_match_clipping_afresh)
             double lo = fmax(cell.lo.v[axis], pb.lo.v[axis]), hi = fmin(cell.hi.v[axis], pb.hi.v[axis]);
             if (!(hi - lo > 1e-4))
                 break;
-            double sp = lo + rnd_in(0.1, 0.9) * (hi - lo); /* through the triangle's bounds */
+            double sp = lo + rnd_in(0.1, 0.9) * (hi - lo); /* through its bounds */
             bsp_box out[2];
             uint64_t parts[2];
-            int got = kd_clip_triangle_split_part(s, 0, pb, &cell, axis, sp, pad, &path, part,
-                                                  out, parts);
+            int got = kd_clip_split_part(s, 0, pb, &cell, axis, sp, pad, &path, &scr, part, out,
+                                         parts);
             REQUIRE(got >= 0);
             splits++;
             bsp_box child[2] = {cell, cell};
             child[0].hi.v[axis] = child[1].lo.v[axis] = sp;
             for (int c = 0; c < 2; c++) {
                 bsp_box one;
-                int r = kd_clip_prim(s, 0, &child[c], pad, NULL, &one);
-                REQUIRE(r >= 0);
-                CHECK_MSG((got >> c & 1) == r, "trial %d depth %d side %d: part %d, afresh %d",
-                          trial, depth, c, got >> c & 1, r);
-                if (r == 1 && (got >> c & 1))
-                    for (int k = 0; k < 3; k++) {
-                        CHECK(fabs(out[c].lo.v[k] - one.lo.v[k]) <= 1e-12);
-                        CHECK(fabs(out[c].hi.v[k] - one.hi.v[k]) <= 1e-12);
-                    }
+                int in = got >> c & 1, afresh = kd_clip_prim(s, 0, &child[c], pad, NULL, &one);
+                REQUIRE(afresh >= 0);
+                if (kind < 2) {
+                    CHECK_MSG(in == afresh, "trial %d depth %d side %d: part %d, afresh %d", trial,
+                              depth, c, in, afresh);
+                    if (afresh && in)
+                        for (int k = 0; k < 3; k++) {
+                            CHECK(fabs(out[c].lo.v[k] - one.lo.v[k]) <= 1e-12);
+                            CHECK(fabs(out[c].hi.v[k] - one.hi.v[k]) <= 1e-12);
+                        }
+                    continue;
+                }
+                CHECK_MSG(in || !kd_polygon_meets_box(s, 0, &child[c]),
+                          "trial %d depth %d side %d: the part lost the star", trial, depth, c);
+                for (int q = 0; q < 64; q++) { /* the star's points in the child */
+                    double rho = rnd_in(0, 3), phi = rnd_in(0, 2 * PI_TEST);
+                    bsp_vec3 x = v3_add(v3_scale(u, rho * cos(phi)), v3_scale(w, rho * sin(phi)));
+                    if (!inside_planar_polygon(r, th, nv, rho, phi) ||
+                        !(x.x > child[c].lo.x && x.x < child[c].hi.x && x.y > child[c].lo.y &&
+                          x.y < child[c].hi.y && x.z > child[c].lo.z && x.z < child[c].hi.z))
+                        continue;
+                    sampled++;
+                    CHECK_MSG(in && x.x >= out[c].lo.x && x.x <= out[c].hi.x &&
+                                  x.y >= out[c].lo.y && x.y <= out[c].hi.y &&
+                                  x.z >= out[c].lo.z && x.z <= out[c].hi.z,
+                              "trial %d depth %d side %d: a point of the star outside its bounds",
+                              trial, depth, c);
+                }
             }
             if (!got)
                 break;
@@ -1498,7 +1573,9 @@ TEST(sah_triangle_parts_match_clipping_afresh)
         kd_clip_path_free(&path);
         bsp_scene_destroy(s);
     }
+    kd_clip_scratch_free(&scr);
     CHECK_MSG(used > splits / 4, "parts used at %d of %d splits", used, splits);
+    CHECK_MSG(sampled > trials, "only %d points of stars sampled", sampled);
 }
 
 /* --- determinism, calibration, scaling -------------------------------------------------------------- */

@@ -171,24 +171,23 @@ static void split_bounds(const bsp_vec3 *in, size_t n, unsigned k, double cl, do
 
 #define STACK_VERTS 32
 
-/* Bounds of polygon VS[0..N) ∩ G into *B (PB: its unclipped bounds). The
- * planes of G are taken in the order of the share of the current bounds
- * they cut away, largest first, and skipped once the current polygon lies on
- * their kept side, so a large polygon in a small cell shrinks at the first
- * plane. Each plane at most doubles the vertex count (an output vertex is an
- * input vertex or a crossing edge), so the output buffer is grown to 2N
- * first; it never holds the current polygon, which lives in the other one. */
-static int clip_polygon(const bsp_vec3 *vs, size_t n, bsp_box pb, const bsp_box *g,
-                        kd_clip_scratch *scr, bsp_box *b)
+/* Clips polygon VS[0..N) (bounds PB) to G, ping-ponging between BUF[0]
+ * and BUF[1] (capacities CAP; grown in SCR when too small): *OUT is the part
+ * (VS itself when no plane of G cuts PB), *NOUT its vertex count (0: nothing
+ * left) and *CB its bounds; -1 when out of memory. The planes of G are taken
+ * in the order of the share of the current bounds they cut away, largest
+ * first, and skipped once the current polygon lies on their kept side, so a
+ * large polygon in a small cell shrinks at the first plane. Each plane at
+ * most doubles the vertex count (an output vertex is an input vertex or a
+ * crossing edge), so the output buffer is grown to 2N first; it never holds
+ * the current polygon, which lives in the other one. */
+static int clip_polygon_in(const bsp_vec3 *vs, size_t n, bsp_box pb, const bsp_box *g,
+                           bsp_vec3 *buf[2], size_t cap[2], kd_clip_scratch *s,
+                           const bsp_vec3 **out, size_t *nout, bsp_box *cb_out)
 {
-    bsp_vec3 stk[2][STACK_VERTS];
-    bsp_vec3 *buf[2] = {stk[0], stk[1]};
-    size_t cap[2] = {STACK_VERTS, STACK_VERTS};
-    kd_clip_scratch local = {{NULL, NULL}, {0, 0}};
-    kd_clip_scratch *s = scr ? scr : &local;
     const bsp_vec3 *cur = vs;
     bsp_box cb = pb; /* bounds of the current polygon */
-    int o = 0, result = 1, done = 0;
+    int o = 0, done = 0;
     while (n > 0) {
         int plane = -1;
         double most = 0.0;
@@ -209,16 +208,8 @@ static int clip_polygon(const bsp_vec3 *vs, size_t n, bsp_box pb, const bsp_box 
         done |= 1 << plane;
         int k = plane >> 1, above = !(plane & 1);
         if (2 * n > cap[o]) {
-            if (2 * n > s->cap[o]) {
-                size_t ncap = s->cap[o] * 2 > 2 * n ? s->cap[o] * 2 : 2 * n;
-                bsp_vec3 *nb = realloc(s->buf[o], ncap * sizeof *nb);
-                if (!nb) {
-                    result = -1;
-                    break;
-                }
-                s->buf[o] = nb;
-                s->cap[o] = ncap;
-            }
+            if (!GROW_ARRAY(s->buf[o], s->cap[o], 2 * n))
+                return -1;
             buf[o] = s->buf[o];
             cap[o] = s->cap[o];
         }
@@ -229,8 +220,27 @@ static int clip_polygon(const bsp_vec3 *vs, size_t n, bsp_box pb, const bsp_box 
         for (size_t i = 0; i < n; i++)
             cb = box_add_point(cb, cur[i]);
     }
+    *out = cur;
+    *nout = n;
+    *cb_out = cb;
+    return 1;
+}
+
+/* Bounds of polygon VS[0..N) ∩ G into *B (PB: its unclipped bounds), in
+ * buffers on the stack while they suffice. */
+static int clip_polygon(const bsp_vec3 *vs, size_t n, bsp_box pb, const bsp_box *g,
+                        kd_clip_scratch *scr, bsp_box *b)
+{
+    bsp_vec3 stk[2][STACK_VERTS];
+    bsp_vec3 *buf[2] = {stk[0], stk[1]};
+    size_t cap[2] = {STACK_VERTS, STACK_VERTS};
+    kd_clip_scratch local = {{NULL, NULL}, {0, 0}};
+    const bsp_vec3 *part;
+    size_t m;
+    bsp_box cb;
+    int result = clip_polygon_in(vs, n, pb, g, buf, cap, scr ? scr : &local, &part, &m, &cb);
     if (result == 1) {
-        if (n == 0)
+        if (m == 0)
             result = 0;
         else
             *b = cb;
@@ -606,7 +616,7 @@ int kd_clip_prim_split(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
     return got;
 }
 
-/* --- triangles' parts along a build path ------------------------------------------------------ */
+/* --- triangles' and polygons' parts along a build path -------------------------------------- */
 
 void kd_clip_path_free(kd_clip_path *path)
 {
@@ -623,59 +633,101 @@ static int path_reserve(kd_clip_path *path, size_t more)
 
 /* The handle of the part whose M vertices lie at the path's top + 2, with
  * its bounds B stored in the two slots before them (0 and nothing kept:
- * more than KD_PART_MAX_VERTS; the child clips the triangle afresh). */
+ * more than KD_PART_MAX_VERTS; the child clips the primitive afresh). */
 static uint64_t path_keep(kd_clip_path *path, size_t m, bsp_box b)
 {
     if (m > KD_PART_MAX_VERTS)
         return 0;
     path->v[path->top] = b.lo;
     path->v[path->top + 1] = b.hi;
-    uint64_t h = ((uint64_t)path->top << 8) | m;
+    uint64_t h = ((uint64_t)path->top << KD_PART_COUNT_BITS) | m;
     path->top += m + 2;
     return h;
 }
 
-int kd_clip_triangle_split_part(const bsp_scene *scene, uint32_t prim, bsp_box pb,
-                                const bsp_box *cell, unsigned axis, double s, double pad,
-                                kd_clip_path *path, uint64_t part, bsp_box out[2],
-                                uint64_t parts[2])
+/* The part of triangle or polygon PRIM (bounds PB) in G, clipped afresh as
+ * kd_clip_prim_split does: *CUR its vertices (the primitive's own when no
+ * plane of G cuts PB; VS holds a triangle's), *N their count, *PC their
+ * bounds, *PART its handle when it was clipped and kept on PATH (else 0),
+ * with room left on PATH for both sides of a split of it. 0: nothing of it
+ * is in G; -1: out of memory. */
+static int part_afresh(const bsp_scene *scene, uint32_t prim, bsp_box pb, const bsp_box *g,
+                       kd_clip_path *path, kd_clip_scratch *scr, bsp_vec3 vs[3],
+                       const bsp_vec3 **cur, size_t *n, bsp_box *pc, uint64_t *part)
+{
+    const prim_record *p = &scene->prims[prim];
+    const bsp_vec3 *got;
+    int clipped;
+    if ((shape_kind)p->shape == SHAPE_TRIANGLE) {
+        const triangle_shape *tr = &scene->triangles[p->slot];
+        vs[0] = tr->v0;
+        vs[1] = v3_add(tr->v0, tr->e1);
+        vs[2] = v3_add(tr->v0, tr->e2);
+        /* the part and both sides of it: a plane at most doubles a polygon */
+        if (!path_reserve(path, 5 * TRI_CLIP_MAX + 6))
+            return -1;
+        bsp_vec3 *dst = path->v + path->top + 2;
+        clipped = clip_triangle_into(vs, pb, g, dst, n);
+        if (!clipped && *n == 0)
+            return 0;
+        got = clipped ? dst : vs;
+        if (clipped) {
+            *pc = box_empty();
+            for (size_t i = 0; i < *n; i++)
+                *pc = box_add_point(*pc, got[i]);
+        } else {
+            *pc = pb;
+        }
+    } else {
+        /* its hits: its vertices moved onto its plane (polygon_plane_vertex) */
+        const polygon_shape *pg = &scene->polygons[p->slot];
+        const bsp_vec3 *vp = scene->plane_verts + pg->first;
+        bsp_vec3 *buf[2] = {scr->buf[0], scr->buf[1]};
+        size_t cap[2] = {scr->cap[0], scr->cap[1]};
+        if (clip_polygon_in(vp, pg->count, pb, g, buf, cap, scr, &got, n, pc) < 0)
+            return -1;
+        if (*n == 0)
+            return 0;
+        clipped = got != vp;
+        if (!path_reserve(path, 5 * *n + 6))
+            return -1;
+        if (clipped)
+            memcpy(path->v + path->top + 2, got, *n * sizeof *got);
+    }
+    *part = 0;
+    *cur = got;
+    if (clipped) { /* kept for the children */
+        *cur = path->v + path->top + 2;
+        *part = path_keep(path, *n, *pc);
+    }
+    return 1;
+}
+
+int kd_clip_split_part(const bsp_scene *scene, uint32_t prim, bsp_box pb, const bsp_box *cell,
+                       unsigned axis, double s, double pad, kd_clip_path *path,
+                       kd_clip_scratch *scr, uint64_t part, bsp_box out[2], uint64_t parts[2])
 {
     parts[0] = parts[1] = 0;
     const bsp_box g = box_grow(*cell, pad);
     if (box_is_empty(pb) || !box_meets(pb, &g))
         return 0;
-    size_t n = part & 0xff;
-    /* room for the part (when it is made here) and both sides with their
-     * bounds: a plane at most doubles a polygon's vertices */
-    if (!path_reserve(path, part ? 4 * n + 4 : 5 * TRI_CLIP_MAX + 6))
-        return -1;
+    size_t n;
     const bsp_vec3 *cur;
     bsp_vec3 vs[3];
     bsp_box pc;
     if (part) {
-        const bsp_vec3 *at = path->v + (part >> 8);
+        n = part & KD_PART_COUNT_MASK;
+        /* room for both sides with their bounds: a plane at most doubles a
+         * polygon's vertices */
+        if (!path_reserve(path, 4 * n + 4))
+            return -1;
+        const bsp_vec3 *at = path->v + (part >> KD_PART_COUNT_BITS);
         pc = (bsp_box){at[0], at[1]};
         cur = at + 2;
     } else {
-        /* the triangle, clipped to G here (as kd_clip_prim_split does) and
-         * kept for the children when it was clipped */
-        const triangle_shape *tr = &scene->triangles[scene->prims[prim].slot];
-        vs[0] = tr->v0;
-        vs[1] = v3_add(tr->v0, tr->e1);
-        vs[2] = v3_add(tr->v0, tr->e2);
-        bsp_vec3 *dst = path->v + path->top + 2;
-        if (clip_triangle_into(vs, pb, &g, dst, &n)) {
-            cur = dst;
-            pc = box_empty();
-            for (size_t i = 0; i < n; i++)
-                pc = box_add_point(pc, cur[i]);
-            part = path_keep(path, n, pc);
-        } else if (n == 0) {
-            return 0;
-        } else {
-            cur = vs; /* inside G: the children see the triangle itself */
-            pc = pb;
-        }
+        int r = part_afresh(scene, prim, pb, &g, path, scr, vs, &cur, &n, &pc, &part);
+        if (r <= 0)
+            return r;
     }
     const double cl = s + pad, cr = s - pad;
     int got = 0;
@@ -686,7 +738,7 @@ int kd_clip_triangle_split_part(const bsp_scene *scene, uint32_t prim, bsp_box p
         else
             gc.lo.v[axis] = cr;
         if (box_inside(pb, &gc)) {
-            out[c] = box_grow(pb, pad); /* the triangle lies inside the child: no part */
+            out[c] = box_grow(pb, pad); /* the primitive lies inside the child: no part */
             got |= 1 << c;
             continue;
         }

@@ -52,41 +52,44 @@ HIDDEN int kd_clip_prim_split(const bsp_scene *scene, uint32_t prim, bsp_box pb,
                               const bsp_box *cell, unsigned axis, double s, double pad,
                               kd_clip_scratch *scr, bsp_box out[2]);
 
-/* The parts of triangles inside the cells along an SAH build's path
- * (kd_split_sah.c), so that a straddling triangle is clipped by the one
- * plane of each split instead of to the whole cell every time: OF[p] is
- * the handle of triangle p's part in the current cell's G (the cell grown
- * by the padding), a convex polygon of the vertices V[h >> 8 ..][0 .. h &
- * 255); 0 means the triangle itself, clipped afresh to the cell when it
- * straddles, which is always right (kd_clip_prim_split). The builder sets
- * OF along the path and restores it when it returns from a subtree, and
- * pops V to where it was. A part stays valid below its cell: where the
- * triangle does not straddle a split, its part lies on one side, inside that
- * child's G. Each plane adds a few ulps of error to a vertex, far below the
- * padding (kd_clip.c's rounding note), and the bounds are clamped to the
- * exact ones as ever. */
+/* The parts of triangles and polygons inside the cells along an SAH
+ * build's path (kd_split_sah.c), so that a straddler is clipped by the one
+ * plane of each split instead of to the whole cell every time: OF[p] is the
+ * handle of primitive p's part in the current cell's G (the cell grown by
+ * the padding), the polygon of the vertices V[h >> KD_PART_COUNT_BITS ..][0
+ * .. h & KD_PART_COUNT_MASK); 0 means the primitive itself, clipped afresh
+ * to the cell when it straddles, which is always right (kd_clip_prim_split).
+ * The builder sets OF along the path and restores it when it returns from a
+ * subtree, and pops V to where it was. A part stays valid below its cell:
+ * where the primitive does not straddle a split, its part lies on one side,
+ * inside that child's G. Each plane adds a few ulps of error to a vertex,
+ * far below the padding (kd_clip.c's rounding note), and the bounds are
+ * clamped to the exact ones as ever. A concave polygon's part may carry
+ * zero-width bridges along earlier planes; as with clipping afresh, they
+ * can only make its bounds larger than the true part's, never smaller. */
 typedef struct kd_clip_path {
     uint64_t *of;     /* per primitive: its part's handle, 0: none */
     bsp_vec3 *v;      /* the parts' vertices, a stack */
     size_t top, cap;
 } kd_clip_path;
 
-/* Parts of more vertices are not kept (rounding near a plane can add
- * vertices; a part of a triangle clipped by a box has at most 9 exactly). */
-#define KD_PART_MAX_VERTS 32
+#define KD_PART_COUNT_BITS 16
+#define KD_PART_COUNT_MASK ((1u << KD_PART_COUNT_BITS) - 1)
+/* Parts of more vertices are not kept (the primitive is clipped afresh) */
+#define KD_PART_MAX_VERTS KD_PART_COUNT_MASK
 
 HIDDEN void kd_clip_path_free(kd_clip_path *path);
 
-/* kd_clip_prim_split for triangle PRIM whose part in CELL's G is PART (a
- * handle of PATH; 0: the triangle itself), which also returns the parts of
- * both children in PARTS[2] (pushed on PATH's stack; 0 where the child
- * needs none: the triangle's bounds lie inside its G, or the part was too
- * large to keep, or it is empty). The bounds in OUT are those of
- * kd_clip_prim_split when PART is 0, bit for bit. */
-HIDDEN int kd_clip_triangle_split_part(const bsp_scene *scene, uint32_t prim, bsp_box pb,
-                                       const bsp_box *cell, unsigned axis, double s, double pad,
-                                       kd_clip_path *path, uint64_t part, bsp_box out[2],
-                                       uint64_t parts[2]);
+/* kd_clip_prim_split for triangle or polygon PRIM whose part in CELL's G is
+ * PART (a handle of PATH; 0: the primitive itself), which also returns the
+ * parts of both children in PARTS[2] (pushed on PATH's stack; 0 where the
+ * child needs none: the primitive's bounds lie inside its G, or the part was
+ * too large to keep, or it is empty). SCR: scratch for clipping a large
+ * polygon afresh. */
+HIDDEN int kd_clip_split_part(const bsp_scene *scene, uint32_t prim, bsp_box pb,
+                              const bsp_box *cell, unsigned axis, double s, double pad,
+                              kd_clip_path *path, kd_clip_scratch *scr, uint64_t part,
+                              bsp_box out[2], uint64_t parts[2]);
 
 /* Whether the hits of polygon PRIM (its vertices moved onto its plane,
  * even-odd inside) meet the closed box B: exactly, up to rounding, where

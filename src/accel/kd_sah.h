@@ -171,7 +171,7 @@ typedef struct sah_build {
     uint32_t *list;     /* straddlers, leaf lists */
     size_t list_cap;
     kd_clip_scratch clip;
-    kd_clip_path path;    /* straddling triangles' parts along the path (kd_clip.h) */
+    kd_clip_path path;    /* straddling triangles' and polygons' parts along the path (kd_clip.h) */
     struct part_save *saved; /* the parts a split changed in OF, to restore (kd_split_sah.c) */
     size_t nsaved, saved_cap;
     bsp_error *err;

@@ -227,18 +227,19 @@ struct part_save {
 };
 
 /* Clips straddler P of the split at S on AXIS of CELL to both children into
- * CB (kd_clip_prim_split's result); a triangle from its part along the path,
- * its children's parts saved for the subtrees (b->saved). */
+ * CB (kd_clip_prim_split's result); a triangle or polygon from its part
+ * along the path, its children's parts saved for the subtrees (b->saved). */
 static int clip_straddler(sah_build *b, uint32_t p, const bsp_box *cell, unsigned axis, double s,
                           bsp_box cb[2])
 {
-    if (!b->path.of || (shape_kind)b->scene->prims[p].shape != SHAPE_TRIANGLE)
+    const shape_kind kind = (shape_kind)b->scene->prims[p].shape;
+    if (!b->path.of || (kind != SHAPE_TRIANGLE && kind != SHAPE_POLYGON))
         return kd_clip_prim_split(b->scene, p, b->bounds[p], cell, axis, s, b->t->pad, &b->clip,
                                   cb);
     const uint64_t parent = b->path.of[p];
     uint64_t parts[2];
-    int got = kd_clip_triangle_split_part(b->scene, p, b->bounds[p], cell, axis, s, b->t->pad,
-                                          &b->path, parent, cb, parts);
+    int got = kd_clip_split_part(b->scene, p, b->bounds[p], cell, axis, s, b->t->pad, &b->path,
+                                 &b->clip, parent, cb, parts);
     if (got > 0 && (parent | parts[0] | parts[1])) {
         if (!GROW_ARRAY(b->saved, b->saved_cap, b->nsaved + 1))
             return -1;
