@@ -197,6 +197,7 @@ TEST(cli_stats_of_a_tree)
     CHECK_STR_CONTAINS(out, "primitives: 63");
     CHECK_STR_CONTAINS(out, "N_V");
     CHECK_STR_CONTAINS(out, "invariants     ok");
+    CHECK_STR_CONTAINS(out, "digest");
     free(out);
     /* with every cost 1 (a 4-gon: 0.5 + 4 x 0.125) the model cost is the
      * expected cost with unit costs */
@@ -230,6 +231,21 @@ TEST(cli_gen_round_trip)
     CHECK_STR_CONTAINS(out, "cone     15");
     CHECK_STR_CONTAINS(out, "polygon  1");
     free(out);
+    /* the file holds the very scene: the tree built from it is the generator's, bit for bit */
+    char digest[2][32] = {"", ""};
+    for (int i = 0; i < 2; i++) {
+        snprintf(cmd, sizeof cmd, "%s stats %s --accel sah", harness_cli(),
+                 i ? path : "spd:tree:3");
+        out = harness_run(cmd, &st);
+        REQUIRE(out);
+        CHECK_EQ_INT(st, 0);
+        const char *d = strstr(out, "digest");
+        REQUIRE(d);
+        CHECK(sscanf(d, "digest %31s", digest[i]) == 1);
+        free(out);
+    }
+    CHECK_MSG(digest[0][0] && strcmp(digest[0], digest[1]) == 0, "digests %s (generated), %s (file)",
+              digest[0], digest[1]);
 }
 
 /* Every file of the NFF malformed corpus fails through the CLI with exit

@@ -1200,3 +1200,56 @@ TEST(kd_exact_every_ray_of_tree_render)
 {
     check_render("spd:tree", quick() ? 65 : 513);
 }
+
+/* FNV-1a over the little-endian bytes of the 32-bit words W[0..N), as the
+ * digest is defined (bsp_tree_stats.digest), written out independently. */
+static uint64_t fnv1a_words(const uint32_t *w, size_t n)
+{
+    uint64_t h = 0xcbf29ce484222325ull;
+    for (size_t i = 0; i < n; i++)
+        for (int b = 0; b < 4; b++) {
+            h ^= (uint8_t)(w[i] >> (8 * b));
+            h *= 0x100000001b3ull;
+        }
+    return h;
+}
+
+/* The tree digest: a one-sphere tree's (one leaf listing primitive 0) is the
+ * hash of its words as the node layout defines them; a tree built on 1 and
+ * on 2 threads has one digest (the build is deterministic), and trees that
+ * differ (another leaf size, another rule) have different ones. */
+TEST(tree_digest_names_the_tree)
+{
+    bsp_scene *one = bsp_scene_create();
+    add_sphere(one, bsp_v3(0, 0, 0), 1);
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    bsp_accel *a = NULL;
+    bsp_error err;
+    REQUIRE(bsp_accel_build(one, &o, &a, &err) == BSP_OK);
+    bsp_tree_stats st;
+    bsp_accel_tree_stats(a, &st);
+    REQUIRE(st.leaves == 1 && st.interior_nodes == 0 && st.references == 1);
+    const uint32_t words[3] = {kd_pack(1, KD_LEAF_TAG), 0u /* first entry */, 0u /* prim 0 */};
+    CHECK_MSG(st.digest == fnv1a_words(words, 3), "one leaf: digest %016llx, expected %016llx",
+              (unsigned long long)st.digest, (unsigned long long)fnv1a_words(words, 3));
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(one);
+
+    bsp_scene *s = NULL;
+    REQUIRE(bsp_scene_load("spd:tetra", &s, &err) == BSP_OK);
+    uint64_t d[4];
+    for (int v = 0; v < 4; v++) {
+        bsp_build_options_defaults(&o);
+        o.threads = v == 1 ? 2 : 1;
+        o.max_leaf_prims = v == 2 ? 4 : 0;
+        o.kind = v == 3 ? BSP_ACCEL_KAPLAN : BSP_ACCEL_SAH;
+        REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+        bsp_accel_tree_stats(a, &st);
+        d[v] = st.digest;
+        bsp_accel_destroy(a);
+    }
+    CHECK(d[0] == d[1]);
+    CHECK(d[0] != d[2] && d[0] != d[3] && d[2] != d[3]);
+    bsp_scene_destroy(s);
+}

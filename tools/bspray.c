@@ -617,6 +617,10 @@ static int cmd_stats(int argc, char **argv)
         printf("  model cost     %.3f (SAH under the build's costs, in traversal steps; no\n"
                "                 mailbox term)\n",
                t.model_cost);
+        if (bopts.kind != BSP_ACCEL_NAIVE)
+            printf("  digest         %016" PRIx64 " (nodes and leaf lists hashed: equal digests,\n"
+               "                 the same tree bit for bit)\n",
+               t.digest);
         if (t.budget_cut > 0.0)
             printf("  leaf budget    splits saving < %.3g per ray of the root skipped (estimate)\n",
                    t.budget_cut);

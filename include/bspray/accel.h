@@ -220,6 +220,9 @@ typedef struct bsp_tree_stats {
                              having shown that the budget prunes them; 0: none */
     int budget_rebuilt;   /* 1: that estimate proved too high and the tree was built
                              again without it */
+    uint64_t digest;      /* a 64-bit FNV-1a hash of the nodes (in array order) and the
+                             leaf lists: two builds with equal digests made the same tree
+                             bit for bit (thread counts, options, versions compared) */
 } bsp_tree_stats;
 
 void bsp_accel_tree_stats(const bsp_accel *accel, bsp_tree_stats *stats);
