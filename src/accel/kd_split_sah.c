@@ -218,7 +218,7 @@ static int clipped_events(const sah_build *b, uint32_t p, const bsp_box *cb, con
     return 1;
 }
 
-/* A straddling triangle's part in a split's cell and in each child
+/* A straddling triangle's or polygon's part in a split's cell and in each child
  * (handles of b->path): set in b->path.of for the subtree being built,
  * restored when the split's node returns. */
 struct part_save {
