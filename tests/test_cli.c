@@ -44,12 +44,20 @@ TEST(cli_bench_table_and_csv)
     CHECK(strncmp(line, "scene,N,accel,T_B,bytes,N_IN,N_V,N_EV,N_OIV,", 44) == 0);
     CHECK_STR_CONTAINS(line, ",N_IT,N_TS,");
     CHECK_STR_CONTAINS(line, "primary_Mrays_1t");
-    CHECK_STR_CONTAINS(line, ",T_B_all,model_cost");
-    int rows = 0;
-    while (fgets(line, sizeof line, f))
+    CHECK_STR_CONTAINS(line, ",T_B_all,model_cost,digest");
+    int rows = 0, digests = 0;
+    while (fgets(line, sizeof line, f)) {
         rows++;
+        /* the last column: a tree's 16 hex digits, empty for naive */
+        const char *last = strrchr(line, ',');
+        REQUIRE(last);
+        size_t len = strcspn(last + 1, "\r\n");
+        CHECK_MSG(len == (strstr(line, ",naive,") ? 0u : 16u), "digest column '%s'", last + 1);
+        digests += len == 16;
+    }
     fclose(f);
     CHECK_EQ_INT(rows, 6);
+    CHECK_EQ_INT(digests, 4);
     /* the default scene list runs too (here with one method on a tiny size
      * would take long; just check that an unknown method is a usage error) */
     snprintf(cmd, sizeof cmd, "%s bench spd:balls:1 --accel octree 2>&1", harness_cli());

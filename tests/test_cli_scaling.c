@@ -12,7 +12,8 @@
 #include "harness.h"
 
 static const char scaling_csv_header[] =
-    "scene,accel,N,T_B_1t,us_per_prim,Mprim_per_s,T_B_nt,threads,N_IN,N_V,N_OIV,cost,bytes";
+    "scene,accel,N,T_B_1t,us_per_prim,Mprim_per_s,T_B_nt,threads,N_IN,N_V,N_OIV,cost,bytes,"
+    "speedup,builds,digest";
 
 /* The primitive count of SPEC loaded in this process: the CLI's N must match
  * it. */
@@ -82,6 +83,20 @@ TEST(cli_bench_scaling_table_and_csv)
         CHECK_EQ_INT(n_v, n_in + 1); /* a binary tree */
         CHECK(cost > 0.0);
         CHECK(bytes > 0);
+        /* the last column, the tree's digest, is the one `stats` reports for the scene
+         * (built there on every core: the same tree) */
+        const char *last = strrchr(line, ',');
+        REQUIRE(last);
+        char digest[32] = "", stats_digest[32] = "";
+        CHECK(sscanf(last + 1, "%31s", digest) == 1 && strlen(digest) == 16);
+        snprintf(cmd, sizeof cmd, "%s stats %s --accel sah", harness_cli(), specs[rows]);
+        out = harness_run(cmd, &st);
+        REQUIRE(out);
+        const char *d = strstr(out, "digest");
+        CHECK(d && sscanf(d, "digest %31s", stats_digest) == 1);
+        CHECK_MSG(strcmp(digest, stats_digest) == 0, "%s: digest %s in the CSV, %s from stats",
+                  scene, digest, stats_digest);
+        free(out);
         rows++;
     }
     fclose(f);

@@ -363,7 +363,7 @@ static void csv_header(FILE *f)
     fprintf(f, "scene,N,accel,T_B,bytes,N_IN,N_V,N_EV,N_OIV,max_depth,expected_cost,N_IT,N_TS,"
                "N_ETS,N_EETS,primary_rays,shadow_rays,secondary_rays,T_TR_1t,T_TR_all,threads,"
                "primary_Mrays_1t,primary_Mrays_all,shadow_Mrays_1t,shadow_Mrays_all,"
-               "secondary_Mrays_1t,secondary_Mrays_all,validated_rays,T_B_all,model_cost\n");
+               "secondary_Mrays_1t,secondary_Mrays_all,validated_rays,T_B_all,model_cost,digest\n");
 }
 
 static void csv_row(FILE *f, const bench_row *r, int threads)
@@ -378,7 +378,10 @@ static void csv_row(FILE *f, const bench_row *r, int threads)
             r->t_tr1, r->t_trn, threads);
     for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++)
         fprintf(f, ",%.4f,%.4f", r->rate1[c], r->raten[c]);
-    fprintf(f, ",%ld,%.6f,%.4f\n", r->validated, r->t_build_n, r->tree.model_cost);
+    fprintf(f, ",%ld,%.6f,%.4f,", r->validated, r->t_build_n, r->tree.model_cost);
+    if (r->tree.leaves) /* a tree (bsp_tree_stats.digest); the naive method has none */
+        fprintf(f, "%016" PRIx64, r->tree.digest);
+    fprintf(f, "\n");
     fflush(f);
 }
 

@@ -60,6 +60,8 @@ typedef struct scaling_row {
     double t1_wall;     /* best build, 1 thread, wall clock */
     double tn_wall;     /* best build, --threads threads, wall clock */
     bsp_tree_stats tree;
+    uint64_t digest;    /* the first build's tree digest; every build must match it */
+    int mismatch;       /* a build made another tree (the thread counts' trees differ) */
 } scaling_row;
 
 static void print_help(void)
@@ -100,6 +102,8 @@ static void print_help(void)
            "  MB [bytes]      the tree's memory: nodes, leaf index lists and the\n"
            "                  traversal's leaf-ordered copy of the primitives\n"
            "  [builds]        builds timed per thread count\n"
+           "  [digest]        the tree's digest (bspray stats); every build, on any thread\n"
+           "                  count, must make the same tree, or the run stops (exit 1)\n"
            "The summary: per generator and method, us/prim of the largest scene over that\n"
            "of the smallest, next to ln N of the largest over ln N of the smallest.\n",
            scaling_usage, SCALING_BIG_PRIMS, SCALING_BIG_REPEAT);
@@ -127,8 +131,14 @@ static void timed_builds(const scaling_opts *o, const bsp_scene *scene, scaling_
         double w = bsp_accel_build_seconds(accel);
         *cpu = c < *cpu ? c : *cpu;
         *wall = w < *wall ? w : *wall;
+        bsp_tree_stats ts; /* after the timing: every build's tree is checked */
+        bsp_accel_tree_stats(accel, &ts);
         if (rep == 0)
-            bsp_accel_tree_stats(accel, &r->tree);
+            r->tree = ts;
+        if (threads == 1 && rep == 0)
+            r->digest = ts.digest;
+        else if (ts.digest != r->digest)
+            r->mismatch = 1;
         bsp_accel_destroy(accel);
     }
 }
@@ -188,18 +198,18 @@ static void print_row(const scaling_row *r)
 static void csv_header(FILE *f)
 {
     fprintf(f, "scene,accel,N,T_B_1t,us_per_prim,Mprim_per_s,T_B_nt,threads,N_IN,N_V,N_OIV,cost,"
-               "bytes,speedup,builds\n");
+               "bytes,speedup,builds,digest\n");
 }
 
 static void csv_row(FILE *f, const scaling_row *r, int threads)
 {
     fprintf(f,
             "%s,%s,%zu,%.9f,%.6f,%.4f,%.9f,%d,%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%.4f,%" PRIu64
-            ",%.4f,%d\n",
+            ",%.4f,%d,%016" PRIx64 "\n",
             r->scene, bsp_accel_kind_name(r->kind), r->n, r->t1_cpu, us_per_prim(r),
             mprim_per_s(r), r->tn_wall, threads, r->tree.interior_nodes, r->tree.leaves,
             r->tree.references, r->tree.expected_cost, r->tree.bytes + r->tree.trace_bytes,
-            speedup(r), r->builds);
+            speedup(r), r->builds, r->digest);
     fflush(f);
 }
 
@@ -368,7 +378,7 @@ int bench_scaling(int argc, char **argv)
            "T_B %dt: wall clock)\n\n",
            o.threads);
     print_header(o.threads);
-    int nrows = 0;
+    int nrows = 0, mismatch = 0;
     for (int s = 0; s < nscenes; s++) {
         bsp_scene *scene = load_scene(scenes[s]); /* exits 1 with a message */
         for (int k = 0; k < o.nkinds; k++) {
@@ -380,11 +390,21 @@ int bench_scaling(int argc, char **argv)
             print_row(r);
             if (csv)
                 csv_row(csv, r, o.threads);
+            if (r->mismatch) {
+                fprintf(stderr,
+                        "%s: %s: %s: the builds made different trees (1 and %d threads, "
+                        "or repeated builds): the build is not deterministic\n",
+                        prog, r->scene, bsp_accel_kind_name(r->kind), o.threads);
+                mismatch = 1;
+            }
         }
         bsp_scene_destroy(scene);
+        if (mismatch)
+            break;
     }
-    print_summary(rows, nrows);
-    int rc = 0;
+    if (!mismatch)
+        print_summary(rows, nrows);
+    int rc = mismatch ? EXIT_INPUT : 0;
     if (csv && fclose(csv) != 0) {
         fprintf(stderr, "%s: %s: write failed: %s\n", prog, csv_path, strerror(errno));
         rc = EXIT_INPUT;
