@@ -405,13 +405,23 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     bsp_accel *accel = build_accel(scene, &bo);
     row.t_build = bsp_accel_build_seconds(accel);
     row.t_build_n = row.t_build;
+    bsp_accel_tree_stats(accel, &row.tree);
     if (o->threads > 1 && kind != BSP_ACCEL_NAIVE && kind != BSP_ACCEL_KAPLAN) {
-        bo.threads = o->threads; /* the same tree, on all threads */
+        bo.threads = o->threads; /* the same tree, on all threads: checked by its digest */
         bsp_accel *again = build_accel(scene, &bo);
         row.t_build_n = bsp_accel_build_seconds(again);
+        bsp_tree_stats ts;
+        bsp_accel_tree_stats(again, &ts);
         bsp_accel_destroy(again);
+        if (ts.digest != row.tree.digest) {
+            fprintf(stderr,
+                    "%s: %s: %s built another tree on %d threads than on one (digests "
+                    "%016" PRIx64 ", %016" PRIx64 "); aborting\n",
+                    prog, scene_name, row.method, o->threads, ts.digest, row.tree.digest);
+            bsp_accel_destroy(accel);
+            return 1;
+        }
     }
-    bsp_accel_tree_stats(accel, &row.tree);
     row.mbytes = (double)(row.tree.bytes + row.tree.trace_bytes) / (1024.0 * 1024.0);
 
     if (kind != BSP_ACCEL_NAIVE) {
