@@ -59,9 +59,8 @@ typedef struct scaling_row {
     double t1_cpu;      /* best build, 1 thread, its CPU time */
     double t1_wall;     /* best build, 1 thread, wall clock */
     double tn_wall;     /* best build, --threads threads, wall clock */
-    bsp_tree_stats tree;
-    uint64_t digest;    /* the first build's tree digest; every build must match it */
-    int mismatch;       /* a build made another tree (the thread counts' trees differ) */
+    bsp_tree_stats tree; /* the first build's (one thread); every build must match its digest */
+    int mismatch;        /* a build made another tree (the thread counts' trees differ) */
 } scaling_row;
 
 static void print_help(void)
@@ -133,11 +132,9 @@ static void timed_builds(const scaling_opts *o, const bsp_scene *scene, scaling_
         *wall = w < *wall ? w : *wall;
         bsp_tree_stats ts; /* after the timing: every build's tree is checked */
         bsp_accel_tree_stats(accel, &ts);
-        if (rep == 0)
-            r->tree = ts;
         if (threads == 1 && rep == 0)
-            r->digest = ts.digest;
-        else if (ts.digest != r->digest)
+            r->tree = ts;
+        else if (ts.digest != r->tree.digest)
             r->mismatch = 1;
         bsp_accel_destroy(accel);
     }
@@ -209,7 +206,7 @@ static void csv_row(FILE *f, const scaling_row *r, int threads)
             r->scene, bsp_accel_kind_name(r->kind), r->n, r->t1_cpu, us_per_prim(r),
             mprim_per_s(r), r->tn_wall, threads, r->tree.interior_nodes, r->tree.leaves,
             r->tree.references, r->tree.expected_cost, r->tree.bytes + r->tree.trace_bytes,
-            speedup(r), r->builds, r->digest);
+            speedup(r), r->builds, r->tree.digest);
     fflush(f);
 }
 

@@ -42,6 +42,16 @@ void kd_clip_scratch_free(kd_clip_scratch *scr)
     }
 }
 
+/* The bounds of the points V[0..N) (box_add_point in order, so the same bits
+ * wherever they are taken). */
+static bsp_box points_box(const bsp_vec3 *v, size_t n)
+{
+    bsp_box b = box_empty();
+    for (size_t i = 0; i < n; i++)
+        b = box_add_point(b, v[i]);
+    return b;
+}
+
 /* Clips the closed polygon IN[0..N) to x[k] >= c (ABOVE) or x[k] <= c;
  * writes at most 2N vertices to OUT and returns their count. Coordinates are
  * kept in locals and written whole (writing one component of a vertex just
@@ -216,9 +226,7 @@ static int clip_polygon_in(const bsp_vec3 *vs, size_t n, bsp_box pb, const bsp_b
         n = clip_plane(cur, n, buf[o], k, above ? g->lo.v[k] : g->hi.v[k], above);
         cur = buf[o];
         o ^= 1;
-        cb = box_empty();
-        for (size_t i = 0; i < n; i++)
-            cb = box_add_point(cb, cur[i]);
+        cb = points_box(cur, n);
     }
     *out = cur;
     *nout = n;
@@ -311,10 +319,7 @@ static int clip_triangle(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g, bsp_
     if (n == 0)
         return 0;
     const bsp_vec3 *cur = clipped ? part : v;
-    bsp_box r = box_empty();
-    for (size_t i = 0; i < n; i++)
-        r = box_add_point(r, cur[i]);
-    *b = r;
+    *b = points_box(cur, n);
     return 1;
 }
 
@@ -545,9 +550,7 @@ static int clip_triangle_split(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g
     const bsp_vec3 *cur = v;
     if (clip_triangle_into(v, pb, g, par, &n)) {
         cur = par;
-        pc = box_empty();
-        for (size_t i = 0; i < n; i++)
-            pc = box_add_point(pc, cur[i]);
+        pc = points_box(cur, n);
     } else if (n == 0) {
         return 0;
     } else {
@@ -671,13 +674,7 @@ static int part_afresh(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
         if (!clipped && *n == 0)
             return 0;
         got = clipped ? dst : vs;
-        if (clipped) {
-            *pc = box_empty();
-            for (size_t i = 0; i < *n; i++)
-                *pc = box_add_point(*pc, got[i]);
-        } else {
-            *pc = pb;
-        }
+        *pc = clipped ? points_box(got, *n) : pb;
     } else {
         /* its hits: its vertices moved onto its plane (polygon_plane_vertex) */
         const polygon_shape *pg = &scene->polygons[p->slot];
@@ -751,9 +748,7 @@ int kd_clip_split_part(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
             size_t m = clip_plane(cur, n, dst, (int)axis, c == 0 ? cl : cr, c == 1);
             if (m == 0)
                 continue;
-            b = box_empty();
-            for (size_t i = 0; i < m; i++)
-                b = box_add_point(b, dst[i]);
+            b = points_box(dst, m);
             parts[c] = path_keep(path, m, b);
         }
         if (finish(b, pb, &gc, pad, &out[c]) == 1)

@@ -233,7 +233,7 @@ static int clip_straddler(sah_build *b, uint32_t p, const bsp_box *cell, unsigne
                           bsp_box cb[2])
 {
     const shape_kind kind = (shape_kind)b->scene->prims[p].shape;
-    if (!b->path.of || (kind != SHAPE_TRIANGLE && kind != SHAPE_POLYGON))
+    if (kind != SHAPE_TRIANGLE && kind != SHAPE_POLYGON) /* parts are polygons */
         return kd_clip_prim_split(b->scene, p, b->bounds[p], cell, axis, s, b->t->pad, &b->clip,
                                   cb);
     const uint64_t parent = b->path.of[p];
