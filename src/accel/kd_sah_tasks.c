@@ -153,7 +153,24 @@ bsp_status kd_sah_defer(sah_build *b, uint32_t node, const bsp_box *cell, const 
     return BSP_OK;
 }
 
-/* Builds task TK with W, a worker's copy of the main build's state. */
+/* Grows W's event stack to NEED events at least; its contents are not kept
+ * (a task's lists are copied in after). 0 when out of memory. */
+static int reserve_events(sah_build *w, size_t need)
+{
+    if (need <= w->cap)
+        return 1;
+    size_t ncap = w->cap * 2 > need ? w->cap * 2 : need;
+    free(w->ev);
+    w->ev = bigmem_malloc(ncap * sizeof *w->ev);
+    w->cap = w->ev ? ncap : 0;
+    return w->ev != NULL;
+}
+
+/* Builds task TK with W, a worker's copy of the main build's state: the
+ * task's lists are copied to the foot of the worker's event stack, which
+ * stays from task to task (memory the thread has written before: on the VM
+ * the benchmarks run on, fresh pages cost the kernel's zeroing, a quarter of
+ * balls:6's first build when each task had a stack of its own). */
 static void run_task(sah_build *w, sah_task *tk)
 {
     kd_tree *sub = &tk->sub;
@@ -166,36 +183,29 @@ static void run_task(sah_build *w, sah_task *tk)
     sub->box = tk->cell;
     sub->cap_nodes = 1024;
     sub->nodes = malloc(sub->cap_nodes * sizeof *sub->nodes);
-    if (!sub->nodes) {
-        tk->st = error_set(&tk->err, BSP_ERR_NOMEM, NULL, 0,
-                           "out of memory while building the kd-tree");
+    const size_t m = 2 * tk->n;
+    if (!sub->nodes || (w->record_savings && !kd_tree_record_savings(sub)) ||
+        !reserve_events(w, 3 * m + 1024)) {
+        tk->st = task_oom(&tk->err);
         return;
     }
-    if (w->record_savings && !kd_tree_record_savings(sub)) {
-        tk->st =
-            error_set(&tk->err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
-        return;
-    }
+    memcpy(w->ev, tk->ev, 3 * m * sizeof *w->ev);
+    free(tk->ev);
+    tk->ev = NULL;
     sub->nnodes = 1;
     sub->nodes[0].u.first = 0;
     sub->nodes[0].bits = KD_LEAF_TAG;
     w->t = sub;
     w->err = &tk->err;
-    w->ev = tk->ev; /* the task's event stack, for as long as it runs */
-    w->cap = tk->cap;
-    tk->ev = NULL;
-    node_lists L = {0, 2 * tk->n, tk->n, tk->tsum};
+    node_lists L = {0, m, tk->n, tk->tsum};
     if (w->descent)
         w->descent->reset(w->dctx);
     double cost;
     const double sure = w->min_saving_sure;
     if (tk->min_saving_sure > sure)
         w->min_saving_sure = tk->min_saving_sure;
-    tk->st = kd_sah_build_node(w, 0, tk->cell, L, 6 * tk->n, tk->depth, 0, tk->surface, &cost);
+    tk->st = kd_sah_build_node(w, 0, tk->cell, L, 3 * m, tk->depth, 0, tk->surface, &cost);
     w->min_saving_sure = sure;
-    free(w->ev);
-    w->ev = NULL;
-    w->cap = 0;
     w->t = (kd_tree *)main_t;
 }
 
@@ -235,21 +245,76 @@ static sah_task *take_task(sah_pool *pool, int only_probes)
     return tk;
 }
 
-/* Builds tasks from POOL (see take_task) with scratch of its own; 0 when
- * it could not make that scratch (and so built none). REPORT: the thread
- * that called the build, which reports the progress (proto.progress) after
- * each task it builds. */
-static int run_tasks(sah_pool *pool, int only_probes, int report)
+/* A thread's state for building tasks of POOL in W: the shared part of the
+ * main build's, with scratch of its own. FROM (or NULL): a build whose
+ * scratch W takes over (the main build's, when its thread builds tasks),
+ * its pages written already; the per-primitive classes need no clearing and
+ * the parts along the path are all restored to none when a build returns.
+ * 0 when out of memory (W is then free of scratch). */
+static int worker_init(sah_pool *pool, sah_build *w, sah_build *from)
 {
-    sah_build w = pool->proto;
-    w.cls = calloc((size_t)w.spare + 1, 1);
-    w.path.of = calloc((size_t)w.spare + 1, sizeof *w.path.of); /* each task starts with none */
-    if (w.descent) /* a measure context of its own */
-        w.actx = w.dctx = w.descent->thread_ctx(w.shared_actx);
-    int ready = w.cls && w.path.of && (!w.descent || w.dctx); /* if not, the other threads take the tasks */
+    *w = pool->proto;
+    if (from) {
+        w->cls = from->cls;
+        w->ev = from->ev;
+        w->cap = from->cap;
+        w->nev[0] = from->nev[0];
+        w->nev[1] = from->nev[1];
+        w->nev_cap = from->nev_cap;
+        w->list = from->list;
+        w->list_cap = from->list_cap;
+        w->clip = from->clip;
+        w->path = from->path;
+        w->saved = from->saved;
+        w->saved_cap = from->saved_cap;
+        w->nsaved = 0;
+        w->chunks = from->chunks;
+        w->chunks_cap = from->chunks_cap;
+        w->mruns = from->mruns;
+        w->mruns_cap = from->mruns_cap;
+        /* FROM keeps none of it */
+        from->cls = NULL;
+        from->ev = NULL;
+        from->nev[0] = from->nev[1] = NULL;
+        from->list = NULL;
+        from->chunks = NULL;
+        from->mruns = NULL;
+        from->saved = NULL;
+        memset(&from->clip, 0, sizeof from->clip);
+        memset(&from->path, 0, sizeof from->path);
+        from->cap = from->nev_cap = from->list_cap = from->chunks_cap = from->mruns_cap = 0;
+        from->nsaved = from->saved_cap = 0;
+    } else {
+        w->cls = calloc((size_t)w->spare + 1, 1);
+        w->path.of = calloc((size_t)w->spare + 1, sizeof *w->path.of); /* each task starts with none */
+    }
+    if (w->descent) /* a measure context of its own */
+        w->actx = w->dctx = w->descent->thread_ctx(w->shared_actx);
+    if (w->cls && w->path.of && (!w->descent || w->dctx))
+        return 1;
+    kd_sah_scratch_free(w);
+    if (w->descent && w->dctx)
+        w->descent->free_ctx(w->dctx);
+    w->dctx = NULL;
+    return 0;
+}
+
+static void worker_free(sah_build *w)
+{
+    kd_sah_scratch_free(w);
+    if (w->descent && w->dctx)
+        w->descent->free_ctx(w->dctx);
+    w->dctx = NULL;
+}
+
+/* Builds tasks from POOL (see take_task) with W (worker_init). REPORT: the
+ * thread that called the build, which reports the progress
+ * (proto.progress) after each task it builds. */
+static void run_tasks(sah_pool *pool, sah_build *w, int only_probes, int report)
+{
     sah_task *tk;
-    while (ready && (tk = take_task(pool, only_probes)) != NULL) {
-        run_task(&w, tk);
+    while ((tk = take_task(pool, only_probes)) != NULL) {
+        run_task(w, tk);
         sah_tasks *ts = pool->tasks;
         pthread_mutex_lock(&pool->lock);
         ts->n_done += (double)tk->n;
@@ -259,18 +324,18 @@ static int run_tasks(sah_pool *pool, int only_probes, int report)
             pthread_cond_broadcast(&pool->done);
         }
         pthread_mutex_unlock(&pool->lock);
-        if (report && w.progress)
-            w.progress(done < 1.0 ? done : 1.0, w.progress_ctx);
+        if (report && w->progress)
+            w->progress(done < 1.0 ? done : 1.0, w->progress_ctx);
     }
-    kd_sah_scratch_free(&w);
-    if (w.descent && w.dctx)
-        w.descent->free_ctx(w.dctx);
-    return ready;
 }
 
 static void *worker(void *arg)
 {
-    (void)run_tasks(arg, 0, 0); /* if it cannot, the other threads take the tasks */
+    sah_pool *pool = arg;
+    sah_build w;
+    if (worker_init(pool, &w, NULL)) /* if it cannot, the other threads take the tasks */
+        run_tasks(pool, &w, 0, 0);
+    worker_free(&w);
     return NULL;
 }
 
@@ -436,10 +501,13 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
     b->tasks = NULL;
     if (!ts)
         return st;
-    kd_sah_scratch_free(b); /* the main thread builds tasks now, with scratch of its own */
     sah_pool *pool = ts->pool;
     if (!pool && ts->n > 0 && st == BSP_OK && !(pool = pool_create(b, ts)))
         st = task_oom(b->err);
+    /* the main thread builds tasks now, in the main build's scratch */
+    sah_build w;
+    const int ready = pool && st == BSP_OK && worker_init(pool, &w, b);
+    kd_sah_scratch_free(b); /* what was not taken over */
     if (pool) {
         pthread_mutex_lock(&pool->lock);
         for (size_t i = 0; i < ts->n; i++) /* every task is listed now */
@@ -451,7 +519,9 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
         if (st == BSP_OK && !pool->estimated) {
             /* the probes, with the workers: when this thread finds none left
              * to take, every one is taken; then wait for those still built */
-            if (!run_tasks(pool, 1, 1))
+            if (ready)
+                run_tasks(pool, &w, 1, 1);
+            else
                 st = task_oom(b->err);
             pthread_mutex_lock(&pool->lock);
             while (pool->probes_done < pool->probes_taken)
@@ -468,12 +538,14 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
             pthread_cond_broadcast(&pool->more);
             pthread_mutex_unlock(&pool->lock);
         }
-        if (st == BSP_OK)
-            (void)run_tasks(pool, 0, 1); /* if it cannot, a task left unbuilt fails the build */
+        if (st == BSP_OK && ready)
+            run_tasks(pool, &w, 0, 1); /* if it cannot, a task left unbuilt fails the build */
         for (int i = 0; i < pool->started; i++)
             pthread_join(pool->tid[i], NULL);
         pool_destroy(pool);
     }
+    if (ready)
+        worker_free(&w);
     /* room for every subtree at once (on huge pages, util/bigmem.h): grown
      * splice by splice, the arrays were copied a dozen times into fresh
      * memory; if this fails, splice says so */
