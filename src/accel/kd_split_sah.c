@@ -386,6 +386,28 @@ classify(sah_build *b, const uint64_t *e, size_t split_i, size_t m, classify_cou
     cc->t_ronly = t_ronly;
 }
 
+/* Step 3 of kd_sah_build_node for one axis: the events of SRC[0..M) whose
+ * primitive's class is IN_PLACE (CLS_LEFT or CLS_RIGHT) compacted in place,
+ * those of the other one-sided class copied to DST, both stable; a
+ * straddler's (CLS_BOTH) go nowhere. Stores one event past the last of DST.
+ * Inlined with IN_PLACE constant: no test of it per event. */
+static inline __attribute__((always_inline)) void split_list(uint64_t *src, uint64_t *dst,
+                                                             size_t m, const uint8_t *cls,
+                                                             const unsigned in_place)
+{
+    const unsigned other = CLS_LEFT + CLS_RIGHT - in_place;
+    size_t a = 0, o = 0;
+#pragma GCC unroll 4
+    for (size_t i = 0; i < m; i++) {
+        uint64_t x = src[i];
+        unsigned c = cls[ev_prim(x)];
+        src[a] = x;
+        a += (c & in_place) != 0;
+        dst[o] = x;
+        o += (c & other) != 0;
+    }
+}
+
 /* Builds the subtree of NODE over CELL from the lists L; ev[top, ...) is
  * free. *COST_OUT: the subtree's cost under the model (for retraction).
  * SURFACE: measure by the surface area. A view measure (sah-per, sah-par)
@@ -486,13 +508,18 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     }
     const size_t ns = n - n_lonly - n_ronly;
 
-    /* 3. the one-sided events, in one pass per axis: right ones compacted
-     * above TOP, left ones in place (CLS_LEFT and CLS_RIGHT are one bit
-     * each; the straddlers, CLS_BOTH = 0, come from step 2's candidates) */
+    /* 3. the one-sided events, in one pass per axis: the larger side's
+     * compacted in place, the smaller side's written above TOP (CLS_LEFT and
+     * CLS_RIGHT are one bit each; the straddlers, CLS_BOTH = 0, come from
+     * step 2's candidates). Keeping the larger side in place bounds the
+     * stack: the lists stored above a node's own are at most half of them,
+     * so along any path they sum to at most the root's (about 6 n events),
+     * where always storing the right side let unbalanced splits pile up
+     * (balls: 16.6 n events at the peak, now ...). */
     bsp_box lcell = cell, rcell = cell;
     lcell.hi.v[axis] = rcell.lo.v[axis] = s;
     node_lists LL = {L.base, L.stride, 0, 0.0}, RL = {L.base, L.stride, 0, 0.0};
-    size_t free_top = top;
+    size_t free_top = top, right_top = top;
     /* the straddlers' parts this split saves for its children (clip_straddler),
      * and the path's vertex stack to pop to */
     const size_t saved_from = b->nsaved, path_top = b->path.top;
@@ -503,9 +530,14 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
         RL.n = n; /* all right: likewise */
         RL.tsum = tsum;
     } else {
-        RL.base = top;
-        RL.stride = 2 * (n_ronly + ns);
-        free_top = top + 3 * RL.stride;
+        const int right_in_place = n_ronly > n_lonly;
+        node_lists *stored = right_in_place ? &LL : &RL;
+        stored->base = top;
+        stored->stride = 2 * ((right_in_place ? n_lonly : n_ronly) + ns);
+        free_top = top + 3 * stored->stride;
+        /* the right child's subtree is built after the left one's: when the
+         * left lists lay above TOP, their room is free again by then */
+        right_top = right_in_place ? top : free_top;
         /* + 1: the branch-free loops below store one event past the last */
         if (!grow_u64(&b->ev, &b->cap, free_top + 1))
             return oom(b);
@@ -520,18 +552,12 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
             nsg += cls[p] == CLS_BOTH;
         }
         for (unsigned k = 0; k < 3; k++) {
-            uint64_t *src = b->ev + L.base + k * L.stride; /* left: in place, a <= i */
-            uint64_t *dst = b->ev + RL.base + k * RL.stride;
-            size_t a = 0, o = 0;
-#pragma GCC unroll 4
-            for (size_t i = 0; i < m; i++) {
-                uint64_t x = src[i];
-                unsigned c = cls[ev_prim(x)];
-                src[a] = x;
-                a += c & CLS_LEFT;
-                dst[o] = x;
-                o += c >> 1;
-            }
+            uint64_t *src = b->ev + L.base + k * L.stride; /* in place, a <= i */
+            uint64_t *dst = b->ev + stored->base + k * stored->stride;
+            if (right_in_place)
+                split_list(src, dst, m, cls, CLS_RIGHT);
+            else
+                split_list(src, dst, m, cls, CLS_LEFT);
         }
 
         /* 4. clip the straddlers to each child; their new events, sorted,
@@ -567,7 +593,7 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
                 uint64_t *nl_ev = b->nev[0] + k * stride, *nr_ev = b->nev[1] + k * stride;
                 sort_keys(nl_ev, 2 * kept[0]);
                 sort_keys(nr_ev, 2 * kept[1]);
-                merge_back(b->ev + L.base + k * L.stride, 2 * n_lonly, nl_ev, 2 * kept[0]);
+                merge_back(b->ev + LL.base + k * LL.stride, 2 * n_lonly, nl_ev, 2 * kept[0]);
                 merge_back(b->ev + RL.base + k * RL.stride, 2 * n_ronly, nr_ev, 2 * kept[1]);
             }
         }
@@ -594,7 +620,7 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
         kd_sah_build_node(b, child, lcell, LL, free_top, depth + 1, bad + bad_here, surface, &cl);
     set_parts(b, saved_from, 1);
     if (st == BSP_OK)
-        st = kd_sah_build_node(b, child + 1, rcell, RL, free_top, depth + 1, bad + bad_here, surface, &cr);
+        st = kd_sah_build_node(b, child + 1, rcell, RL, right_top, depth + 1, bad + bad_here, surface, &cr);
     if (st != BSP_OK)
         return st;
     set_parts(b, saved_from, 2);
