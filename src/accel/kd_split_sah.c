@@ -82,10 +82,11 @@
  * evaluated — the same planes as a full sweep, fewer evaluations.
  *
  * Memory: one event stack addressed by index (growing it is safe). A node's
- * lists are at base + k * stride (stride >= 2n); the right child's lists are
- * written above the node's free top, then the left child's are made in place
+ * lists are at base + k * stride (stride >= 2n); the smaller child's lists
+ * are written above the node's free top, the larger child's made in place
  * (stable compaction forward, merge backward), so a chain of cuts reuses one
- * region and a one-sided split copies nothing. No allocation per node: every
+ * region, a one-sided split copies nothing, and the lists stored along a
+ * path sum to at most the root's. No allocation per node: every
  * scratch array is grown amortized, and the large ones lie on huge pages
  * (util/bigmem.h): on 4 KiB pages, page faults and TLB misses were a fifth
  * to a third of a large scene's first build.
@@ -515,7 +516,7 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
      * stack: the lists stored above a node's own are at most half of them,
      * so along any path they sum to at most the root's (about 6 n events),
      * where always storing the right side let unbalanced splits pile up
-     * (balls: 16.6 n events at the peak, now ...). */
+     * (the peak on the SPD scenes: 12.7-19.8 n events, now 8.9-14.1 n). */
     bsp_box lcell = cell, rcell = cell;
     lcell.hi.v[axis] = rcell.lo.v[axis] = s;
     node_lists LL = {L.base, L.stride, 0, 0.0}, RL = {L.base, L.stride, 0, 0.0};
@@ -738,7 +739,7 @@ static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n,
     b->cls = calloc(np + 1, 1); /* + 1: the spare slot */
     b->path.of = calloc(np + 1, sizeof *b->path.of); /* untouched pages cost nothing */
     /* the root's lists and two radix buffers (root_lists), then room: the
-     * stack's peak was 12.7-19.8 n on the SPD scenes (balls:6 16.6 n); pages
+     * stack's peak is 8.9-14.1 n on the SPD scenes (balls:6 11.5 n); pages
      * never written cost nothing, a stack grown is copied */
     b->cap = 20 * n + 1024;
     b->ev = bigmem_malloc(b->cap * sizeof *b->ev);
