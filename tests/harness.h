@@ -36,6 +36,10 @@ char *harness_read_all(FILE *f);
  * terminated; NULL when it cannot run) and sets *STATUS to its exit status
  * (-1 when it did not exit normally). */
 char *harness_run(const char *cmd, int *status);
+struct bsp_image;
+/* Pixels of IMG (read back from an 8-bit PNG) within 1.5/255 of colour I of
+ * the charts' palette (plot_color). */
+long harness_count_color(const struct bsp_image *img, int i);
 
 #define TEST(name)                                                                          \
     static void name(void);                                                                 \

@@ -13,7 +13,9 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "bspray/render.h"
 #include "harness.h"
+#include "render/plot.h"
 
 #define MAX_TESTS 4096
 
@@ -103,6 +105,19 @@ char *harness_read_all(FILE *f)
     if (buf)
         buf[len] = 0;
     return buf;
+}
+
+long harness_count_color(const struct bsp_image *img, int i)
+{
+    float rgb[3];
+    plot_color(i, rgb);
+    long n = 0;
+    for (size_t p = 0; p < (size_t)img->width * (size_t)img->height; p++) {
+        const float *px = img->rgb + 3 * p;
+        n += fabsf(px[0] - rgb[0]) <= 1.5f / 255.0f && fabsf(px[1] - rgb[1]) <= 1.5f / 255.0f &&
+             fabsf(px[2] - rgb[2]) <= 1.5f / 255.0f;
+    }
+    return n;
 }
 
 char *harness_run(const char *cmd, int *status)

@@ -21,11 +21,13 @@ static int count_lines(const char *s)
 
 TEST(cli_bench_table_and_csv)
 {
-    char csv[512], cmd[2048];
+    char csv[512], png[512], cmd[2048];
     snprintf(csv, sizeof csv, "%s/bench.csv", harness_tmpdir());
+    snprintf(png, sizeof png, "%s/bench.png", harness_tmpdir());
     snprintf(cmd, sizeof cmd,
-             "%s bench spd:balls:1 spd:tetra:2 --res 17 --validate 300 --repeat 2 --quiet --csv %s",
-             harness_cli(), csv);
+             "%s bench spd:balls:1 spd:tetra:2 --res 17 --validate 300 --repeat 2 --quiet --csv %s "
+             "--plot %s",
+             harness_cli(), csv, png);
     int st;
     char *out = harness_run(cmd, &st);
     REQUIRE(out);
@@ -58,6 +60,19 @@ TEST(cli_bench_table_and_csv)
     fclose(f);
     CHECK_EQ_INT(rows, 6);
     CHECK_EQ_INT(digests, 4);
+    /* --plot: a bar of each method's colour (naive, kaplan, sah: 0, 1, 2) */
+    bsp_image *chart = NULL;
+    bsp_error err;
+    REQUIRE(bsp_image_read_png(png, &chart, &err) == BSP_OK);
+    CHECK_EQ_INT(chart->width, 960);
+    CHECK_EQ_INT(chart->height, 640);
+    for (int k = 0; k < 3; k++)
+        CHECK_MSG(harness_count_color(chart, k) > 100, "no bar of method %d", k);
+    bsp_image_destroy(chart);
+    /* an unwritable --plot path fails before any work, naming the file */
+    snprintf(cmd, sizeof cmd, "%s bench spd:balls:1 --plot %s/no/such/dir/b.png 2>&1",
+             harness_cli(), harness_tmpdir());
+    CHECK_RUN(cmd, 1, "b.png: cannot open for writing");
     /* the default scene list runs too (here with one method on a tiny size
      * would take long; just check that an unknown method is a usage error) */
     snprintf(cmd, sizeof cmd, "%s bench spd:balls:1 --accel octree 2>&1", harness_cli());

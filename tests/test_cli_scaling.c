@@ -30,12 +30,13 @@ static size_t prim_count_of(const char *spec)
 
 TEST(cli_bench_scaling_table_and_csv)
 {
-    char csv[512], cmd[2048];
+    char csv[512], png[512], cmd[2048];
     snprintf(csv, sizeof csv, "%s/scaling.csv", harness_tmpdir());
+    snprintf(png, sizeof png, "%s/scaling.png", harness_tmpdir());
     snprintf(cmd, sizeof cmd,
              "%s bench --scaling spd:balls:2 spd:balls:3 --repeat 1 --threads 2 --quiet "
-             "--csv %s",
-             harness_cli(), csv);
+             "--csv %s --plot %s",
+             harness_cli(), csv, png);
     int st;
     char *out = harness_run(cmd, &st);
     REQUIRE(out);
@@ -101,12 +102,27 @@ TEST(cli_bench_scaling_table_and_csv)
     }
     fclose(f);
     CHECK_EQ_INT(rows, 2);
+    /* --plot: the balls line (colour 0, two sizes, and its dashed ln N line)
+     * and the grey line of a million primitives per second (colour 7) */
+    bsp_image *chart = NULL;
+    bsp_error err;
+    REQUIRE(bsp_image_read_png(png, &chart, &err) == BSP_OK);
+    CHECK_EQ_INT(chart->width, 960);
+    CHECK_EQ_INT(chart->height, 640);
+    CHECK(harness_count_color(chart, 0) > 50);
+    CHECK(harness_count_color(chart, 7) > 50);
+    CHECK(harness_count_color(chart, 1) == 0); /* no second generator */
+    bsp_image_destroy(chart);
 }
 
 TEST(cli_bench_scaling_help_and_bad_arguments)
 {
     char cmd[1024];
     int st;
+    /* an unwritable --plot path fails before any build, naming the file */
+    snprintf(cmd, sizeof cmd, "%s bench --scaling spd:balls:1 --plot %s/no/such/dir/s.png 2>&1",
+             harness_cli(), harness_tmpdir());
+    CHECK_RUN(cmd, 1, "s.png: cannot open for writing");
     snprintf(cmd, sizeof cmd, "%s bench --scaling --help", harness_cli());
     char *out = harness_run(cmd, &st);
     REQUIRE(out);

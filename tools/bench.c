@@ -31,11 +31,12 @@
 
 #include "bench.h"
 #include "cli.h"
+#include "render/plot.h"
 
 static const char bench_usage[] =
     "bspray bench [SCENE...] [--accel LIST] [--res N] [--depth N] [--threads N]\n"
     "                        [--mailbox on|off] [--validate N] [--repeat N] [--csv FILE]\n"
-    "                        [--quiet]\n"
+    "                        [--plot FILE.png] [--quiet]\n"
     "       bspray bench --paper [SCENE...] [--accel LIST] [--csv FILE] ...  (see --paper --help)\n"
     "       bspray bench --scaling [SCENE...] [--accel LIST] [--repeat N] ...  (see --scaling --help)";
 
@@ -94,6 +95,7 @@ static void print_help(void)
            "  --validate N      random rays compared with naive before timing (default 20000)\n"
            "  --repeat N        timed renders per T_TR figure, the best counts (default 3)\n"
            "  --csv FILE        also write one CSV row per scene x method\n"
+           "  --plot FILE.png   also draw T_TR 1t per scene and method as bars (log scale)\n"
            "  --quiet           no progress lines on stderr\n"
            "  --costs LIST, --empty-bonus F, --min-saving X, --leaf-budget X, --leaf-budget-min N,\n"
            "                 --budget-cut F|off  the SAH model (see\n"
@@ -385,9 +387,10 @@ static void csv_row(FILE *f, const bench_row *r, int threads)
     fflush(f);
 }
 
-/* Benchmarks one method on SCENE; returns 0, or 1 when validation failed. */
+/* Benchmarks one method on SCENE into *OUT; returns 0, or 1 when validation
+ * failed. */
 static int bench_method(const bench_opts *o, const char *scene_name, const bsp_scene *scene,
-                        const bsp_accel *naive, bsp_accel_kind kind)
+                        const bsp_accel *naive, bsp_accel_kind kind, bench_row *out)
 {
     bench_row row;
     memset(&row, 0, sizeof row);
@@ -515,7 +518,66 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     if (o->csv)
         csv_row(o->csv, &row, o->threads);
     bsp_accel_destroy(accel);
+    *out = row;
     return 0;
+}
+
+/* --plot: T_TR 1t of every scene (a group of bars) and method (a bar of its
+ * colour), on a log scale: the paper's comparison of rendering times. 0 when
+ * the file could not be written (with a message). */
+static int write_plot(const char *path, const bench_row *rows, int nrows, const bench_opts *o)
+{
+    const size_t nr = (size_t)nrows, nk = (size_t)o->nkinds;
+    const char **cats = calloc(nr + 1, sizeof *cats);
+    double *t = calloc(nk * (nr + 1), sizeof *t);
+    plot_series *series = calloc(nk + 1, sizeof *series);
+    int rc = 1;
+    if (!cats || !t || !series) {
+        fprintf(stderr, "%s: %s: out of memory\n", prog, path);
+        rc = 0;
+    } else {
+        size_t ncat = 0;
+        for (size_t i = 0; i < nk * (nr + 1); i++)
+            t[i] = NAN; /* no bar: the method did not run on the scene */
+        for (size_t i = 0; i < nr; i++) {
+            size_t c = 0;
+            while (c < ncat && strcmp(cats[c], rows[i].scene))
+                c++;
+            if (c == ncat)
+                cats[ncat++] = rows[i].scene;
+            for (size_t k = 0; k < nk; k++)
+                if (!strcmp(rows[i].method, bsp_accel_kind_name(o->kinds[k])))
+                    t[k * (nr + 1) + c] = rows[i].t_tr1;
+        }
+        for (size_t c = 0; c < ncat; c++) /* "spd:balls" is "balls" under its bars */
+            if (!strncmp(cats[c], "spd:", 4))
+                cats[c] += 4;
+        for (size_t k = 0; k < nk; k++)
+            series[k] = (plot_series){bsp_accel_kind_name(o->kinds[k]), NULL, t + k * (nr + 1),
+                                      ncat, 0, (int)k};
+        char title[160];
+        snprintf(title, sizeof title, "RENDER TIME, ONE THREAD (%d X %d, DEPTH %d)", o->res,
+                 o->res, o->depth);
+        plot_chart c = {title,
+                        {"SCENE", 0, 0.0, 0.0},
+                        {"SECONDS, LOG SCALE (LOWER IS FASTER)", 1, 0.0, 0.0},
+                        series,
+                        nk,
+                        cats,
+                        ncat};
+        plot_fit_axes(&c);
+        int width = 140 + 120 * (int)ncat; /* room for a label like TEAPOT:12 at full size */
+        width = width < 960 ? 960 : width > 4000 ? 4000 : width;
+        bsp_error err;
+        if (plot_write_png(&c, width, 640, path, &err) != BSP_OK) {
+            fprintf(stderr, "%s: %s\n", prog, err.message);
+            rc = 0;
+        }
+    }
+    free(cats);
+    free(t);
+    free(series);
+    return rc;
 }
 
 int cmd_bench(int argc, char **argv)
@@ -538,7 +600,7 @@ int cmd_bench(int argc, char **argv)
     /* the default methods: naive, kaplan, sah (the view rules: --accel, or --paper) */
     for (int k = BSP_ACCEL_NAIVE; k <= BSP_ACCEL_SAH; k++)
         o.kinds[o.nkinds++] = (bsp_accel_kind)k;
-    const char *csv_path = NULL;
+    const char *csv_path = NULL, *plot_path = NULL;
     const char **scenes = bench_scene_array(argc, bench_default_scenes);
     int nscenes = 0;
     for (; a.i < argc; a.i++) {
@@ -564,6 +626,8 @@ int cmd_bench(int argc, char **argv)
             o.repeat = parse_int(&a, s, 1, 100);
         } else if (!strcmp(s, "--csv")) {
             csv_path = opt_value(&a, s);
+        } else if (!strcmp(s, "--plot")) {
+            plot_path = opt_value(&a, s);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             o.quiet = 1;
         } else if (parse_cost_arg(&a, &o.costs)) {
@@ -575,18 +639,30 @@ int cmd_bench(int argc, char **argv)
         }
     }
     nscenes = bench_scenes_or_defaults(scenes, nscenes, bench_default_scenes);
+    bench_row *rows = calloc((size_t)nscenes * (size_t)o.nkinds + 1, sizeof *rows);
+    if (!rows) {
+        fprintf(stderr, "%s: out of memory\n", prog);
+        free(scenes);
+        return EXIT_INPUT;
+    }
+    if (plot_path && !plot_path_writable(plot_path)) { /* before minutes of renders */
+        free(rows);
+        free(scenes);
+        return EXIT_INPUT;
+    }
     if (csv_path) {
         o.csv = fopen(csv_path, "w");
         if (!o.csv) {
             fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, csv_path,
                     strerror(errno));
+            free(rows);
             free(scenes);
             return EXIT_INPUT;
         }
         csv_header(o.csv);
     }
     print_header(o.threads);
-    int rc = 0;
+    int rc = 0, nrows = 0;
     for (int i = 0; i < nscenes && rc == 0; i++) {
         bsp_scene *scene = load_scene(scenes[i]);
         if (!bsp_scene_camera(scene)) {
@@ -602,7 +678,8 @@ int cmd_bench(int argc, char **argv)
             if (o.kinds[k] == BSP_ACCEL_NAIVE && !o.kinds_given &&
                 bsp_scene_prim_count(scene) > NAIVE_DEFAULT_MAX_PRIMS)
                 continue; /* would not finish in reasonable time */
-            rc = bench_method(&o, scenes[i], scene, naive, o.kinds[k]);
+            rc = bench_method(&o, scenes[i], scene, naive, o.kinds[k], &rows[nrows]);
+            nrows += rc == 0;
         }
         bsp_accel_destroy(naive);
         bsp_scene_destroy(scene);
@@ -611,6 +688,9 @@ int cmd_bench(int argc, char **argv)
         fprintf(stderr, "%s: %s: write failed: %s\n", prog, csv_path, strerror(errno));
         rc = EXIT_INPUT;
     }
+    if (rc == 0 && plot_path && !write_plot(plot_path, rows, nrows, &o))
+        rc = EXIT_INPUT;
+    free(rows);
     free(scenes);
     return rc ? EXIT_INPUT : 0;
 }

@@ -25,10 +25,11 @@
 
 #include "bench.h"
 #include "cli.h"
+#include "render/plot.h"
 
 static const char scaling_usage[] =
     "bspray bench --scaling [SCENE...] [--accel LIST] [--repeat N] [--threads N]\n"
-    "                       [--csv FILE] [--quiet]";
+    "                       [--csv FILE] [--plot FILE.png] [--quiet]";
 
 /* Two generators from ~10^4 to ~10^6 primitives: sphereflakes (spheres) and
  * the Sierpinski tetrahedron (triangles). */
@@ -82,6 +83,10 @@ static void print_help(void)
            "                  more than %d primitives get %d unless --repeat is given)\n"
            "  --threads N     the all-threads build uses N threads (default: all cores)\n"
            "  --csv FILE      also write one CSV row per scene x method\n"
+           "  --plot FILE.png also draw the series: us/prim against N (log scale), one\n"
+           "                  line per generator and method, each with a dashed line of\n"
+           "                  how an O(N log N) build would grow from its smallest scene,\n"
+           "                  and a grey dashed line at 1 us (a million per second)\n"
            "  --quiet         no progress lines on stderr\n"
            "  --costs LIST, --empty-bonus F, --min-saving X, --leaf-budget X, --leaf-budget-min N,\n"
            "                 --budget-cut F|off  the SAH model (see\n"
@@ -265,6 +270,95 @@ static void print_summary(const scaling_row *rows, int nrows)
     free(seen);
 }
 
+/* --plot: us/prim against N per generator x method (the rows of one group in
+ * increasing N), and for a group of two sizes or more a dashed line from its
+ * smallest scene growing like ln N, what an O(N log N) build does. 0 when the
+ * file could not be written (with a message). */
+static int write_plot(const char *path, const scaling_row *rows, int nrows)
+{
+    const size_t nr = (size_t)nrows;
+    plot_series *series = calloc(2 * nr + 1, sizeof *series);
+    double *xs = calloc(2 * nr + 1, sizeof *xs), *ys = calloc(2 * nr + 1, sizeof *ys);
+    char(*names)[160] = calloc(2 * nr + 1, sizeof *names);
+    int *order = calloc(nr + 1, sizeof *order);
+    char *seen = calloc(nr + 1, 1);
+    int ok = series && xs && ys && names && order && seen;
+    size_t ns = 0, used = 0;
+    int group = 0;
+    for (int i = 0; ok && i < nrows; i++) {
+        if (seen[i])
+            continue;
+        char gi[128], gj[128];
+        generator_of(rows[i].scene, gi, sizeof gi);
+        size_t m = 0;
+        for (int j = i; j < nrows; j++) { /* the group's rows, by insertion in N order */
+            if (seen[j] || rows[j].kind != rows[i].kind ||
+                strcmp(generator_of(rows[j].scene, gj, sizeof gj), gi))
+                continue;
+            seen[j] = 1;
+            size_t at = m++;
+            while (at > 0 && rows[order[at - 1]].n > rows[j].n) {
+                order[at] = order[at - 1];
+                at--;
+            }
+            order[at] = j;
+        }
+        double *x = xs + used, *y = ys + used;
+        for (size_t k = 0; k < m; k++) {
+            x[k] = (double)rows[order[k]].n;
+            y[k] = us_per_prim(&rows[order[k]]);
+        }
+        used += m;
+        snprintf(names[ns], sizeof names[ns], "%s %s", gi, bsp_accel_kind_name(rows[i].kind));
+        series[ns] = (plot_series){names[ns], x, y, m, 0, group};
+        ns++;
+        if (m >= 2 && x[0] >= 2.0) {
+            double *ry = ys + used;
+            for (size_t k = 0; k < m; k++)
+                ry[k] = y[0] * log(x[k]) / log(x[0]);
+            used += m;
+            snprintf(names[ns], sizeof names[ns], "%s: LN N", gi);
+            series[ns] = (plot_series){names[ns], x, ry, m, 1, group};
+            ns++;
+        }
+        group++;
+    }
+    /* the target of issue #3: a million primitives per second, 1 us each */
+    double target_x[2] = {INFINITY, -INFINITY}, target_y[2] = {1.0, 1.0};
+    for (int i = 0; i < nrows; i++) {
+        target_x[0] = fmin(target_x[0], (double)rows[i].n);
+        target_x[1] = fmax(target_x[1], (double)rows[i].n);
+    }
+    if (ok && nrows > 0)
+        series[ns++] = (plot_series){"1M PRIMITIVES/S", target_x, target_y, 2, 1, 7};
+    int rc = 1;
+    if (!ok) {
+        fprintf(stderr, "%s: %s: out of memory\n", prog, path);
+        rc = 0;
+    } else {
+        plot_chart c = {"BUILD TIME PER PRIMITIVE, ONE THREAD",
+                        {"PRIMITIVES N (LOG SCALE)", 1, 0.0, 0.0},
+                        {"MICROSECONDS PER PRIMITIVE", 0, 0.0, 0.0},
+                        series,
+                        ns,
+                        NULL,
+                        0};
+        plot_fit_axes(&c);
+        bsp_error err;
+        if (plot_write_png(&c, 960, 640, path, &err) != BSP_OK) {
+            fprintf(stderr, "%s: %s\n", prog, err.message);
+            rc = 0;
+        }
+    }
+    free(series);
+    free(xs);
+    free(ys);
+    free(names);
+    free(order);
+    free(seen);
+    return rc;
+}
+
 /* Before a run of minutes: is SCENE an SPD scene of a known name and size
  * factor, or a file that loads? 1, or 0 with a message. A file is loaded
  * and freed again (the run loads one scene at a time, to keep the memory of
@@ -315,7 +409,7 @@ int bench_scaling(int argc, char **argv)
     o.repeat = 3;
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
     o.threads = ncpu > 0 ? (int)ncpu : 1;
-    const char *csv_path = NULL;
+    const char *csv_path = NULL, *plot_path = NULL;
     const char **scenes = bench_scene_array(argc, bench_scaling_default_scenes);
     int nscenes = 0;
     for (; a.i < argc; a.i++) {
@@ -338,6 +432,8 @@ int bench_scaling(int argc, char **argv)
             o.threads = parse_int(&a, s, 1, 256);
         } else if (!strcmp(s, "--csv")) {
             csv_path = opt_value(&a, s);
+        } else if (!strcmp(s, "--plot")) {
+            plot_path = opt_value(&a, s);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             o.quiet = 1;
         } else if (parse_cost_arg(&a, &o.costs)) {
@@ -347,6 +443,10 @@ int bench_scaling(int argc, char **argv)
         } else {
             scenes[nscenes++] = s;
         }
+    }
+    if (plot_path && !plot_path_writable(plot_path)) { /* before minutes of builds */
+        free(scenes);
+        return EXIT_INPUT;
     }
     nscenes = bench_scenes_or_defaults(scenes, nscenes, bench_scaling_default_scenes);
     for (int s = 0; s < nscenes; s++)
@@ -402,6 +502,8 @@ int bench_scaling(int argc, char **argv)
     if (!mismatch)
         print_summary(rows, nrows);
     int rc = mismatch ? EXIT_INPUT : 0;
+    if (!mismatch && plot_path && !write_plot(plot_path, rows, nrows))
+        rc = EXIT_INPUT;
     if (csv && fclose(csv) != 0) {
         fprintf(stderr, "%s: %s: write failed: %s\n", prog, csv_path, strerror(errno));
         rc = EXIT_INPUT;

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "cli.h"
 #include "util/progress.h"
@@ -513,4 +514,18 @@ void apply_view_args(bsp_scene *scene, const char *path, const view_args *v,
 fail:
     fprintf(stderr, "%s: %s: %s\n", prog, path, err.message);
     exit(EXIT_INPUT);
+}
+
+int plot_path_writable(const char *path)
+{
+    const int existed = access(path, F_OK) == 0;
+    FILE *f = fopen(path, "ab"); /* appends nothing: the file stays as it is */
+    if (!f) {
+        fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, path, strerror(errno));
+        return 0;
+    }
+    fclose(f);
+    if (!existed)
+        remove(path);
+    return 1;
 }

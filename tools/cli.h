@@ -23,6 +23,10 @@ typedef struct args {
 void die_usage(const char *usage, const char *fmt, const char *arg) __attribute__((noreturn));
 /* The value of option OPT (the next argument), or a usage error. */
 const char *opt_value(args *a, const char *opt);
+/* Whether PATH can be written (checked before a long run that writes it at
+ * the end): 1, or 0 with a message naming it. Leaves no file behind that
+ * was not there. */
+int plot_path_writable(const char *path);
 /* A whole number in [LO, HI] as the value of OPT, or a usage error. */
 int parse_int(args *a, const char *opt, long lo, long hi);
 int parse_on_off(args *a, const char *opt);
