@@ -90,19 +90,27 @@ TEST(plot_fit_axes_from_the_data)
     plot_series s = {"A", x, y, 3, 0, 0};
     plot_chart c = {NULL, {NULL, 1, 0, 0}, {NULL, 0, 0, 0}, &s, 1, NULL, 0};
     plot_fit_axes(&c);
-    CHECK_NEAR(c.x.lo, 10.0, 1e-9);
+    /* 92 lies in [50, 100), 7382 in (5000, 10000] */
+    CHECK_NEAR(c.x.lo, 50.0, 1e-9);
     CHECK_NEAR(c.x.hi, 1e4, 1e-6);
     /* 2.04 plus 8 % is 2.2032; a sixth of that is 0.37: steps of 0.5, up to 2.5 */
     CHECK(c.y.lo == 0.0);
     CHECK_NEAR(c.y.hi, 2.5, 1e-12);
-    /* a bar chart on a log axis: decades around the bars; NaN and 0 are no bars */
+    /* a bar chart on a log axis: 1, 2, 5 steps around the bars; NaN and 0 are no bars */
     const double t[] = {0.013, NAN, 4.2, 0.0};
     plot_series b = {"B", NULL, t, 4, 0, 0};
     const char *cats[] = {"a", "b", "c", "d"};
     plot_chart d = {NULL, {NULL, 0, 0, 0}, {NULL, 1, 0, 0}, &b, 1, cats, 4};
     plot_fit_axes(&d);
     CHECK_NEAR(d.y.lo, 0.01, 1e-12);
-    CHECK_NEAR(d.y.hi, 10.0, 1e-9);
+    CHECK_NEAR(d.y.hi, 5.0, 1e-9);
+    /* exact round values are their own bounds; one value: a decade from it */
+    const double one[] = {200.0};
+    plot_series o = {"O", one, one, 1, 0, 0};
+    plot_chart g = {NULL, {NULL, 1, 0, 0}, {NULL, 1, 0, 0}, &o, 1, NULL, 0};
+    plot_fit_axes(&g);
+    CHECK_NEAR(g.x.lo, 200.0, 1e-9);
+    CHECK_NEAR(g.x.hi, 2000.0, 1e-9);
     /* no showable value at all: a default range, never NaN */
     const double none[] = {NAN, -1.0};
     plot_series z = {"Z", none, none, 2, 0, 0};

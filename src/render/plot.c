@@ -134,6 +134,25 @@ static int data_range(const plot_chart *c, const plot_axis *a, int which, double
     return any;
 }
 
+/* The largest of 1, 2, 5 times a power of ten at or below V > 0 (UP: the
+ * smallest at or above it). */
+static double round_125(double v, int up)
+{
+    const double m[3] = {1.0, 2.0, 5.0};
+    double p = pow(10.0, floor(log10(v)));
+    if (!up) {
+        double best = p;
+        for (int k = 1; k < 3; k++)
+            if (m[k] * p <= v * (1.0 + 1e-12))
+                best = m[k] * p;
+        return best;
+    }
+    for (int k = 0; k < 3; k++)
+        if (m[k] * p >= v * (1.0 - 1e-12))
+            return m[k] * p;
+    return 10.0 * p;
+}
+
 static void fit_axis(const plot_chart *c, plot_axis *a, int which, int from_zero)
 {
     double mn = 0.0, mx = 0.0;
@@ -143,8 +162,8 @@ static void fit_axis(const plot_chart *c, plot_axis *a, int which, int from_zero
         return;
     }
     if (a->log) {
-        a->lo = pow(10.0, floor(log10(mn)));
-        a->hi = pow(10.0, ceil(log10(mx)));
+        a->lo = round_125(mn, 0);
+        a->hi = round_125(mx, 1);
         if (!(a->hi > a->lo))
             a->hi = a->lo * 10.0;
         return;

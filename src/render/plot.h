@@ -64,8 +64,9 @@ PLOT_HIDDEN void plot_tick_label(double v, char *buf, size_t size);
 
 /* Sets both axes' ranges from the data shown: a linear axis from 0 (or
  * below, for negative data) up to its largest value plus a margin, rounded
- * to a tick; a log axis from the power of ten at or below the smallest
- * positive value to the one at or above the largest (a decade at least).
+ * to a tick; a log axis from the largest 1, 2 or 5 times a power of ten at
+ * or below the smallest positive value to the smallest one at or above the
+ * largest (a decade if they are equal).
  * A bar chart's value axis always includes the bars' base. Axes with no
  * showable value get [0, 1] (log: [1, 10]). */
 PLOT_HIDDEN void plot_fit_axes(plot_chart *c);
