@@ -99,14 +99,15 @@ static int json_coverage(const char *path, double *cov, long *primary)
  * the plain renderer reports for the same camera (perspective and ortho). */
 TEST(cli_bench_paper_counts)
 {
-    char csv[512], json[2][512], cmd[4096];
+    char csv[512], png[512], json[2][512], cmd[4096];
     snprintf(csv, sizeof csv, "%s/paper.csv", harness_tmpdir());
+    snprintf(png, sizeof png, "%s/paper_plot.png", harness_tmpdir());
     snprintf(json[0], sizeof json[0], "%s/paper_persp.json", harness_tmpdir());
     snprintf(json[1], sizeof json[1], "%s/paper_ortho.json", harness_tmpdir());
     snprintf(cmd, sizeof cmd,
              "%s bench --paper spd:rings:1 --accel sah,sah-per,sah-par --validate 200 --repeat 1 --quiet "
-             "--csv %s",
-             harness_cli(), csv);
+             "--csv %s --plot %s",
+             harness_cli(), csv, png);
     int st;
     char *out = harness_run(cmd, &st);
     REQUIRE(out);
@@ -115,6 +116,15 @@ TEST(cli_bench_paper_counts)
     CHECK_STR_CONTAINS(out, "| sah-par, ortho |");
     CHECK_STR_CONTAINS(out, "N_IT primary: sah-per vs sah");
     free(out);
+    /* --plot: one bar per rule in its colour (sah, sah-per, sah-par: 0, 1, 2),
+     * none of a fourth */
+    bsp_image *chart = NULL;
+    bsp_error err;
+    REQUIRE(bsp_image_read_png(png, &chart, &err) == BSP_OK);
+    for (int k = 0; k < 3; k++)
+        CHECK_MSG(harness_count_color(chart, k) > 100, "no bar of rule %d", k);
+    CHECK_EQ_INT(harness_count_color(chart, 3), 0);
+    bsp_image_destroy(chart);
     for (int ortho = 0; ortho < 2; ortho++) {
         snprintf(cmd, sizeof cmd,
                  "%s render spd:rings:1 --res 513 --quiet %s --stats-json %s -o %s/paper.png",

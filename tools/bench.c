@@ -522,51 +522,25 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     return 0;
 }
 
-/* --plot: T_TR 1t of every scene (a group of bars) and method (a bar of its
- * colour), on a log scale: the paper's comparison of rendering times. 0 when
- * the file could not be written (with a message). */
-static int write_plot(const char *path, const bench_row *rows, int nrows, const bench_opts *o)
+int bench_write_bars(const char *path, const char *title, const char *ylabel,
+                     const char *const *scenes, size_t nscenes, const char *const *names,
+                     size_t nseries, const double *values)
 {
-    const size_t nr = (size_t)nrows, nk = (size_t)o->nkinds;
-    const char **cats = calloc(nr + 1, sizeof *cats);
-    double *t = calloc(nk * (nr + 1), sizeof *t);
-    plot_series *series = calloc(nk + 1, sizeof *series);
+    const char **cats = calloc(nscenes + 1, sizeof *cats);
+    plot_series *series = calloc(nseries + 1, sizeof *series);
     int rc = 1;
-    if (!cats || !t || !series) {
+    if (!cats || !series) {
         fprintf(stderr, "%s: %s: out of memory\n", prog, path);
         rc = 0;
     } else {
-        size_t ncat = 0;
-        for (size_t i = 0; i < nk * (nr + 1); i++)
-            t[i] = NAN; /* no bar: the method did not run on the scene */
-        for (size_t i = 0; i < nr; i++) {
-            size_t c = 0;
-            while (c < ncat && strcmp(cats[c], rows[i].scene))
-                c++;
-            if (c == ncat)
-                cats[ncat++] = rows[i].scene;
-            for (size_t k = 0; k < nk; k++)
-                if (!strcmp(rows[i].method, bsp_accel_kind_name(o->kinds[k])))
-                    t[k * (nr + 1) + c] = rows[i].t_tr1;
-        }
-        for (size_t c = 0; c < ncat; c++) /* "spd:balls" is "balls" under its bars */
-            if (!strncmp(cats[c], "spd:", 4))
-                cats[c] += 4;
-        for (size_t k = 0; k < nk; k++)
-            series[k] = (plot_series){bsp_accel_kind_name(o->kinds[k]), NULL, t + k * (nr + 1),
-                                      ncat, 0, (int)k};
-        char title[160];
-        snprintf(title, sizeof title, "RENDER TIME, ONE THREAD (%d X %d, DEPTH %d)", o->res,
-                 o->res, o->depth);
-        plot_chart c = {title,
-                        {"SCENE", 0, 0.0, 0.0},
-                        {"SECONDS, LOG SCALE (LOWER IS FASTER)", 1, 0.0, 0.0},
-                        series,
-                        nk,
-                        cats,
-                        ncat};
+        for (size_t c = 0; c < nscenes; c++) /* "spd:balls" is "balls" under its bars */
+            cats[c] = strncmp(scenes[c], "spd:", 4) ? scenes[c] : scenes[c] + 4;
+        for (size_t k = 0; k < nseries; k++)
+            series[k] = (plot_series){names[k], NULL, values + k * nscenes, nscenes, 0, (int)k};
+        plot_chart c = {title, {"SCENE", 0, 0.0, 0.0}, {ylabel, 1, 0.0, 0.0}, series, nseries,
+                        cats, nscenes};
         plot_fit_axes(&c);
-        int width = 140 + 120 * (int)ncat; /* room for a label like TEAPOT:12 at full size */
+        int width = 140 + 120 * (int)nscenes; /* room for a label like TEAPOT:12 at full size */
         width = width < 960 ? 960 : width > 4000 ? 4000 : width;
         bsp_error err;
         if (plot_write_png(&c, width, 640, path, &err) != BSP_OK) {
@@ -575,8 +549,48 @@ static int write_plot(const char *path, const bench_row *rows, int nrows, const 
         }
     }
     free(cats);
-    free(t);
     free(series);
+    return rc;
+}
+
+/* --plot: T_TR 1t of every scene (a group of bars) and method (a bar of its
+ * colour), on a log scale: the paper's comparison of rendering times. 0 when
+ * the file could not be written (with a message). */
+static int write_plot(const char *path, const bench_row *rows, int nrows, const bench_opts *o)
+{
+    const size_t nr = (size_t)nrows, nk = (size_t)o->nkinds;
+    const char **scenes = calloc(nr + 1, sizeof *scenes), **names = calloc(nk + 1, sizeof *names);
+    double *t = calloc(nk * (nr + 1), sizeof *t);
+    int rc = 0;
+    if (!scenes || !names || !t) {
+        fprintf(stderr, "%s: %s: out of memory\n", prog, path);
+    } else {
+        size_t ns = 0;
+        for (size_t i = 0; i < nr; i++) { /* the scenes, in the order run */
+            size_t c = 0;
+            while (c < ns && strcmp(scenes[c], rows[i].scene))
+                c++;
+            if (c == ns)
+                scenes[ns++] = rows[i].scene;
+        }
+        for (size_t i = 0; i < nk * ns; i++)
+            t[i] = NAN; /* no bar: the method did not run on the scene */
+        for (size_t k = 0; k < nk; k++)
+            names[k] = bsp_accel_kind_name(o->kinds[k]);
+        for (size_t i = 0; i < nr; i++)
+            for (size_t c = 0; c < ns; c++)
+                for (size_t k = 0; k < nk; k++)
+                    if (!strcmp(rows[i].scene, scenes[c]) && !strcmp(rows[i].method, names[k]))
+                        t[k * ns + c] = rows[i].t_tr1;
+        char title[160];
+        snprintf(title, sizeof title, "RENDER TIME, ONE THREAD (%d X %d, DEPTH %d)", o->res,
+                 o->res, o->depth);
+        rc = bench_write_bars(path, title, "SECONDS, LOG SCALE (LOWER IS FASTER)", scenes, ns,
+                              names, nk, t);
+    }
+    free(scenes);
+    free(names);
+    free(t);
     return rc;
 }
 

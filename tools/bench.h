@@ -43,6 +43,15 @@ const char **bench_scene_array(int argc, const char *const *defaults);
  * the count. */
 int bench_scenes_or_defaults(const char **scenes, int n, const char *const *defaults);
 
+/* --plot: a bar chart on a log scale written to PATH, one group of bars per
+ * scene (SCENES[0..NSCENES), shown without an "spd:" prefix) and one bar
+ * colour per series (NAMES[0..NSERIES)); VALUES[s * NSCENES + c] is series
+ * s's bar in scene c (NAN, 0 or less: none). 0, with a message, when the
+ * chart cannot be written. */
+int bench_write_bars(const char *path, const char *title, const char *ylabel,
+                     const char *const *scenes, size_t nscenes, const char *const *names,
+                     size_t nseries, const double *values);
+
 /* `bspray bench --paper ...`: the paper's Table 1 (paper.c). */
 int bench_paper(int argc, char **argv);
 

@@ -29,7 +29,7 @@ static const char paper_usage[] =
     "bspray bench --paper [SCENE...] [--accel LIST] [--res N] [--depth N] [--threads N]\n"
     "                     [--validate N] [--repeat N] [--mailbox on|off] [--mixed-model M]\n"
     "                     [--mixed-check on|off] [--cost-termination] [--csv FILE]\n"
-    "                     [--quiet]";
+    "                     [--plot FILE.png] [--quiet]";
 
 typedef struct paper_rule {
     const char *label;
@@ -119,6 +119,7 @@ static void print_help(void)
            "  --csv FILE      one row per scene x rule x ray set, columns scene, accel, camera,\n"
            "                  rays (primary or all), ScnCov, nrays, N_V, N_IT, N_TS, T_B, T_TR,\n"
            "                  threads, tree (the rule, or sah where sah-mixed kept sah's tree)\n"
+           "  --plot FILE.png also draw T_B + T_TR per scene and rule as bars (log scale)\n"
            "  --quiet         no progress lines\n"
            "  --costs LIST, --empty-bonus F, --min-saving X, --leaf-budget X, --leaf-budget-min N,\n"
            "                 --budget-cut F|off  the SAH model (see\n"
@@ -488,6 +489,37 @@ static void csv_rows(FILE *f, const table *t)
         }
 }
 
+/* --plot: the paper's measure, T_B + T_TR, per scene (a group of bars) and
+ * rule (a colour), on a log scale. 0 with a message when it cannot be
+ * written. */
+static int write_plot(const char *path, const table *t)
+{
+    const paper_opts *o = t->o;
+    const size_t ns = (size_t)t->nscenes, nr = (size_t)o->nrules;
+    double *v = calloc(ns * nr + 1, sizeof *v);
+    const char **names = calloc(nr + 1, sizeof *names);
+    int rc = 0;
+    if (!v || !names) {
+        fprintf(stderr, "%s: %s: out of memory\n", prog, path);
+    } else {
+        for (size_t r = 0; r < nr; r++) {
+            names[r] = o->rules[r].label;
+            for (size_t s = 0; s < ns; s++) {
+                const cell *c = &t->cells[s * nr + r];
+                v[r * ns + s] = c->done ? figure_of(c, F_TOTAL, 1) : NAN;
+            }
+        }
+        char title[160];
+        snprintf(title, sizeof title, "BUILD + RENDER TIME (%d X %d, DEPTH %d, %d THREAD%s)",
+                 o->res, o->res, o->depth, o->threads, o->threads == 1 ? "" : "S");
+        rc = bench_write_bars(path, title, "T_B + T_TR IN SECONDS, LOG SCALE (LOWER IS FASTER)",
+                              t->scenes, ns, names, nr, v);
+    }
+    free(v);
+    free(names);
+    return rc;
+}
+
 int bench_paper(int argc, char **argv)
 {
     args a = {argc, 1, argv, paper_usage};
@@ -503,7 +535,7 @@ int bench_paper(int argc, char **argv)
     o.mixed_check = 1;
     o.nrules = (int)(sizeof default_rules / sizeof default_rules[0]);
     memcpy(o.rules, default_rules, sizeof default_rules);
-    const char *csv_path = NULL;
+    const char *csv_path = NULL, *plot_path = NULL;
     const char **scenes = bench_scene_array(argc, bench_default_scenes);
     int nscenes = 0;
     for (; a.i < argc; a.i++) {
@@ -538,6 +570,8 @@ int bench_paper(int argc, char **argv)
             o.repeat = parse_int(&a, s, 1, 100);
         } else if (!strcmp(s, "--csv")) {
             csv_path = opt_value(&a, s);
+        } else if (!strcmp(s, "--plot")) {
+            plot_path = opt_value(&a, s);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             o.quiet = 1;
         } else if (s[0] == '-' && s[1]) {
@@ -545,6 +579,10 @@ int bench_paper(int argc, char **argv)
         } else {
             scenes[nscenes++] = s;
         }
+    }
+    if (plot_path && !plot_path_writable(plot_path)) { /* before minutes of renders */
+        free(scenes);
+        return EXIT_INPUT;
     }
     nscenes = bench_scenes_or_defaults(scenes, nscenes, bench_default_scenes);
     FILE *csv = NULL;
@@ -582,6 +620,8 @@ int bench_paper(int argc, char **argv)
     }
     if (rc == 0)
         print_tables(&t);
+    if (rc == 0 && plot_path && !write_plot(plot_path, &t))
+        rc = 1;
     if (csv) {
         csv_rows(csv, &t);
         if (fclose(csv) != 0) {
