@@ -566,22 +566,19 @@ static int write_plot(const char *path, const bench_row *rows, int nrows, const 
         fprintf(stderr, "%s: %s: out of memory\n", prog, path);
     } else {
         size_t ns = 0;
-        for (size_t i = 0; i < nr; i++) { /* the scenes, in the order run */
-            size_t c = 0;
-            while (c < ns && strcmp(scenes[c], rows[i].scene))
-                c++;
-            if (c == ns)
+        for (size_t i = 0; i < nr; i++) /* the scenes, in the order run (a scene's rows are adjacent) */
+            if (ns == 0 || strcmp(scenes[ns - 1], rows[i].scene))
                 scenes[ns++] = rows[i].scene;
-        }
-        for (size_t i = 0; i < nk * ns; i++)
-            t[i] = NAN; /* no bar: the method did not run on the scene */
         for (size_t k = 0; k < nk; k++)
             names[k] = bsp_accel_kind_name(o->kinds[k]);
-        for (size_t i = 0; i < nr; i++)
-            for (size_t c = 0; c < ns; c++)
-                for (size_t k = 0; k < nk; k++)
-                    if (!strcmp(rows[i].scene, scenes[c]) && !strcmp(rows[i].method, names[k]))
-                        t[k * ns + c] = rows[i].t_tr1;
+        for (size_t i = 0; i < nk * ns; i++)
+            t[i] = NAN; /* no bar: the method did not run on the scene */
+        for (size_t i = 0, c = 0; i < nr; i++) {
+            c += i > 0 && strcmp(rows[i - 1].scene, rows[i].scene) != 0;
+            for (size_t k = 0; k < nk; k++)
+                if (!strcmp(rows[i].method, names[k]))
+                    t[k * ns + c] = rows[i].t_tr1;
+        }
         char title[160];
         snprintf(title, sizeof title, "RENDER TIME, ONE THREAD (%d X %d, DEPTH %d)", o->res,
                  o->res, o->depth);

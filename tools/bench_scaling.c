@@ -230,31 +230,47 @@ static const char *generator_of(const char *scene, char *buf, size_t size)
     return buf;
 }
 
+/* The rows of row I's group (its generator, GEN, and method) not yet SEEN:
+ * marked in SEEN and listed in ORDER by increasing N (rows of equal N in
+ * table order); returns how many. */
+static size_t take_group(const scaling_row *rows, int nrows, int i, char *seen, int *order,
+                         char *gen, size_t gen_size)
+{
+    char gj[256];
+    generator_of(rows[i].scene, gen, gen_size);
+    size_t m = 0;
+    for (int j = i; j < nrows; j++) {
+        if (seen[j] || rows[j].kind != rows[i].kind ||
+            strcmp(generator_of(rows[j].scene, gj, sizeof gj), gen))
+            continue;
+        seen[j] = 1;
+        size_t at = m++;
+        while (at > 0 && rows[order[at - 1]].n > rows[j].n) {
+            order[at] = order[at - 1];
+            at--;
+        }
+        order[at] = j;
+    }
+    return m;
+}
+
 /* Per generator x method with at least two sizes: the growth of µs/prim
  * from the smallest to the largest scene. */
 static void print_summary(const scaling_row *rows, int nrows)
 {
     int printed = 0;
     char *seen = calloc((size_t)nrows + 1, 1);
-    if (!seen)
-        return;
-    for (int i = 0; i < nrows; i++) {
+    int *order = calloc((size_t)nrows + 1, sizeof *order);
+    for (int i = 0; seen && order && i < nrows; i++) {
         if (seen[i])
             continue;
-        char gi[256], gj[256];
-        generator_of(rows[i].scene, gi, sizeof gi);
-        int lo = i, hi = i, count = 0;
-        for (int j = i; j < nrows; j++) {
-            if (rows[j].kind != rows[i].kind || strcmp(generator_of(rows[j].scene, gj, sizeof gj), gi))
-                continue;
-            seen[j] = 1;
-            count++;
-            if (rows[j].n < rows[lo].n)
-                lo = j;
-            if (rows[j].n > rows[hi].n)
-                hi = j;
-        }
-        if (count < 2 || rows[lo].n == rows[hi].n || rows[lo].n < 2)
+        char gi[256];
+        size_t m = take_group(rows, nrows, i, seen, order, gi, sizeof gi);
+        size_t top = m - 1; /* the first of the largest scenes */
+        while (top > 0 && rows[order[top - 1]].n == rows[order[m - 1]].n)
+            top--;
+        const int lo = order[0], hi = order[top];
+        if (m < 2 || rows[lo].n == rows[hi].n || rows[lo].n < 2)
             continue;
         if (!printed) {
             printf("\n| generator | accel | N smallest → largest | µs/prim smallest → largest | "
@@ -268,6 +284,7 @@ static void print_summary(const scaling_row *rows, int nrows)
                ua > 0.0 ? ub / ua : 0.0, log((double)rows[hi].n) / log((double)rows[lo].n));
     }
     free(seen);
+    free(order);
 }
 
 /* --plot: us/prim against N per generator x method (the rows of one group in
@@ -278,45 +295,33 @@ static int write_plot(const char *path, const scaling_row *rows, int nrows)
 {
     const size_t nr = (size_t)nrows;
     plot_series *series = calloc(2 * nr + 1, sizeof *series);
-    double *xs = calloc(2 * nr + 1, sizeof *xs), *ys = calloc(2 * nr + 1, sizeof *ys);
+    double *xs = calloc(nr + 1, sizeof *xs), *ys = calloc(2 * nr + 1, sizeof *ys);
     char(*names)[160] = calloc(2 * nr + 1, sizeof *names);
     int *order = calloc(nr + 1, sizeof *order);
     char *seen = calloc(nr + 1, 1);
     int ok = series && xs && ys && names && order && seen;
-    size_t ns = 0, used = 0;
+    size_t ns = 0, nx = 0, ny = 0; /* series, and values used in XS and YS */
     int group = 0;
     for (int i = 0; ok && i < nrows; i++) {
         if (seen[i])
             continue;
-        char gi[128], gj[128];
-        generator_of(rows[i].scene, gi, sizeof gi);
-        size_t m = 0;
-        for (int j = i; j < nrows; j++) { /* the group's rows, by insertion in N order */
-            if (seen[j] || rows[j].kind != rows[i].kind ||
-                strcmp(generator_of(rows[j].scene, gj, sizeof gj), gi))
-                continue;
-            seen[j] = 1;
-            size_t at = m++;
-            while (at > 0 && rows[order[at - 1]].n > rows[j].n) {
-                order[at] = order[at - 1];
-                at--;
-            }
-            order[at] = j;
-        }
-        double *x = xs + used, *y = ys + used;
+        char gi[128];
+        size_t m = take_group(rows, nrows, i, seen, order, gi, sizeof gi);
+        double *x = xs + nx, *y = ys + ny;
         for (size_t k = 0; k < m; k++) {
             x[k] = (double)rows[order[k]].n;
             y[k] = us_per_prim(&rows[order[k]]);
         }
-        used += m;
+        nx += m;
+        ny += m;
         snprintf(names[ns], sizeof names[ns], "%s %s", gi, bsp_accel_kind_name(rows[i].kind));
         series[ns] = (plot_series){names[ns], x, y, m, 0, group};
         ns++;
-        if (m >= 2 && x[0] >= 2.0) {
-            double *ry = ys + used;
+        if (m >= 2 && x[0] >= 2.0) { /* its ln N line, through the same N */
+            double *ry = ys + ny;
             for (size_t k = 0; k < m; k++)
                 ry[k] = y[0] * log(x[k]) / log(x[0]);
-            used += m;
+            ny += m;
             snprintf(names[ns], sizeof names[ns], "%s: LN N", gi);
             series[ns] = (plot_series){names[ns], x, ry, m, 1, group};
             ns++;

@@ -299,6 +299,12 @@ HIDDEN int kd_build_threads(const bsp_build_options *o);
 
 /* Frees B's scratch (not the shared per-primitive arrays). */
 HIDDEN void kd_sah_scratch_free(sah_build *b);
+/* B holds no scratch (its pointers NULL, its sizes 0), whatever it held:
+ * for a copy of a build that must not share its scratch. */
+HIDDEN void kd_sah_scratch_forget(sah_build *b);
+/* TO takes over FROM's scratch, which then holds none (for a thread that
+ * goes on building in memory another build has written). */
+HIDDEN void kd_sah_scratch_move(sah_build *to, sah_build *from);
 
 /* The best plane on axis K of a node (its sorted events E[0..M), N
  * primitives, cost sum TSUM, cell CELL, 1 / its measure INV_AREA — halved

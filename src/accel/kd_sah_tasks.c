@@ -246,6 +246,15 @@ static sah_task *take_task(sah_pool *pool, int only_probes)
     return tk;
 }
 
+/* Frees what worker_init gave W. */
+static void worker_free(sah_build *w)
+{
+    kd_sah_scratch_free(w);
+    if (w->descent && w->dctx)
+        w->descent->free_ctx(w->dctx);
+    w->dctx = NULL;
+}
+
 /* A thread's state for building tasks of POOL in W: the shared part of the
  * main build's, with scratch of its own. FROM (or NULL): a build whose
  * scratch W takes over (the main build's, when its thread builds tasks),
@@ -256,35 +265,7 @@ static int worker_init(sah_pool *pool, sah_build *w, sah_build *from)
 {
     *w = pool->proto;
     if (from) {
-        w->cls = from->cls;
-        w->ev = from->ev;
-        w->cap = from->cap;
-        w->nev[0] = from->nev[0];
-        w->nev[1] = from->nev[1];
-        w->nev_cap = from->nev_cap;
-        w->list = from->list;
-        w->list_cap = from->list_cap;
-        w->clip = from->clip;
-        w->path = from->path;
-        w->saved = from->saved;
-        w->saved_cap = from->saved_cap;
-        w->nsaved = 0;
-        w->chunks = from->chunks;
-        w->chunks_cap = from->chunks_cap;
-        w->mruns = from->mruns;
-        w->mruns_cap = from->mruns_cap;
-        /* FROM keeps none of it */
-        from->cls = NULL;
-        from->ev = NULL;
-        from->nev[0] = from->nev[1] = NULL;
-        from->list = NULL;
-        from->chunks = NULL;
-        from->mruns = NULL;
-        from->saved = NULL;
-        memset(&from->clip, 0, sizeof from->clip);
-        memset(&from->path, 0, sizeof from->path);
-        from->cap = from->nev_cap = from->list_cap = from->chunks_cap = from->mruns_cap = 0;
-        from->nsaved = from->saved_cap = 0;
+        kd_sah_scratch_move(w, from);
     } else {
         w->cls = calloc((size_t)w->spare + 1, 1);
         w->path.of = calloc((size_t)w->spare + 1, sizeof *w->path.of); /* each task starts with none */
@@ -293,19 +274,8 @@ static int worker_init(sah_pool *pool, sah_build *w, sah_build *from)
         w->actx = w->dctx = w->descent->thread_ctx(w->shared_actx);
     if (w->cls && w->path.of && (!w->descent || w->dctx))
         return 1;
-    kd_sah_scratch_free(w);
-    if (w->descent && w->dctx)
-        w->descent->free_ctx(w->dctx);
-    w->dctx = NULL;
+    worker_free(w);
     return 0;
-}
-
-static void worker_free(sah_build *w)
-{
-    kd_sah_scratch_free(w);
-    if (w->descent && w->dctx)
-        w->descent->free_ctx(w->dctx);
-    w->dctx = NULL;
 }
 
 /* Builds tasks from POOL (see take_task) with W (worker_init). REPORT: the
@@ -375,21 +345,7 @@ static sah_pool *pool_create(const sah_build *b, sah_tasks *ts)
     w->tasks = NULL; /* a task defers nothing */
     w->actx = w->descent ? NULL : b->actx;
     w->dctx = NULL;
-    w->cls = NULL;
-    w->ev = NULL;
-    w->cap = 0;
-    w->nev[0] = w->nev[1] = NULL;
-    w->nev_cap = 0;
-    w->list = NULL;
-    w->list_cap = 0;
-    memset(&w->clip, 0, sizeof w->clip);
-    memset(&w->path, 0, sizeof w->path);
-    w->saved = NULL;
-    w->nsaved = w->saved_cap = 0;
-    w->chunks = NULL;
-    w->chunks_cap = 0;
-    w->mruns = NULL;
-    w->mruns_cap = 0;
+    kd_sah_scratch_forget(w);
     return pool;
 }
 

@@ -929,6 +929,21 @@ done:
     return st;
 }
 
+void kd_sah_scratch_forget(sah_build *b)
+{
+    b->cls = NULL;
+    b->ev = NULL;
+    b->nev[0] = b->nev[1] = NULL;
+    b->list = NULL;
+    b->chunks = NULL;
+    b->mruns = NULL;
+    b->saved = NULL;
+    memset(&b->clip, 0, sizeof b->clip);
+    memset(&b->path, 0, sizeof b->path);
+    b->cap = b->nev_cap = b->list_cap = b->chunks_cap = b->mruns_cap = 0;
+    b->nsaved = b->saved_cap = 0;
+}
+
 void kd_sah_scratch_free(sah_build *b)
 {
     free(b->cls);
@@ -941,15 +956,29 @@ void kd_sah_scratch_free(sah_build *b)
     kd_clip_scratch_free(&b->clip);
     kd_clip_path_free(&b->path);
     free(b->saved);
-    b->saved = NULL;
-    b->nsaved = b->saved_cap = 0;
-    b->cls = NULL;
-    b->ev = NULL;
-    b->nev[0] = b->nev[1] = NULL;
-    b->list = NULL;
-    b->chunks = NULL;
-    b->mruns = NULL;
-    b->cap = b->nev_cap = b->list_cap = b->chunks_cap = b->mruns_cap = 0;
+    kd_sah_scratch_forget(b);
+}
+
+void kd_sah_scratch_move(sah_build *to, sah_build *from)
+{
+    to->cls = from->cls;
+    to->ev = from->ev;
+    to->cap = from->cap;
+    to->nev[0] = from->nev[0];
+    to->nev[1] = from->nev[1];
+    to->nev_cap = from->nev_cap;
+    to->list = from->list;
+    to->list_cap = from->list_cap;
+    to->chunks = from->chunks;
+    to->chunks_cap = from->chunks_cap;
+    to->mruns = from->mruns;
+    to->mruns_cap = from->mruns_cap;
+    to->saved = from->saved;
+    to->saved_cap = from->saved_cap;
+    to->nsaved = 0;
+    to->clip = from->clip;
+    to->path = from->path;
+    kd_sah_scratch_forget(from);
 }
 
 bsp_status kd_build_sah(kd_tree *t, const bsp_scene *scene, const bsp_build_options *o,
