@@ -27,6 +27,16 @@ void harness_abort_test(void) __attribute__((noreturn));
 const char *harness_shared_dir(void);
 /* Path of the CLI binary under test (BSPRAY_CLI, default build/bspray). */
 const char *harness_cli(void);
+
+/* A uniform double in [0, 1) from the xorshift64* state *S (seeded by the
+ * test, so failures reproduce). */
+static inline double harness_rnd(unsigned long long *s)
+{
+    *s ^= *s >> 12;
+    *s ^= *s << 25;
+    *s ^= *s >> 27;
+    return (double)((*s * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+}
 /* A fresh temporary directory for this run (created on first use). */
 const char *harness_tmpdir(void);
 /* Everything F has left, NUL-terminated (malloc'd), or NULL when out of

@@ -23,11 +23,10 @@
 #include <errno.h>
 #include <inttypes.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
+#include <time.h>
 
 #include "bench.h"
 #include "cli.h"
@@ -155,64 +154,31 @@ double bench_cpu_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-typedef struct shoot_job {
-    const bsp_accel *accel;
-    const bsp_ray *rays;
-    const uint32_t *from;
-    size_t begin, end;
-    int any;
-    uint64_t hits;
-    int failed;
-} shoot_job;
-
-static void *shoot_main(void *arg)
-{
-    shoot_job *j = arg;
-    bsp_query *q = bsp_query_create(j->accel);
-    if (!q) {
-        j->failed = 1;
-        return NULL;
-    }
-    uint64_t hits = 0;
-    bsp_hit h;
-    for (size_t i = j->begin; i < j->end; i++)
-        hits += j->any ? (uint64_t)bsp_occluded_from(j->accel, q, &j->rays[i], j->from[i])
-                       : (uint64_t)bsp_intersect_from(j->accel, q, &j->rays[i], j->from[i], &h);
-    j->hits = hits;
-    bsp_query_destroy(q);
-    return NULL;
-}
-
 /* Passes over a recorded ray set; bench reports the fastest. */
 #define SHOOT_REPEATS 3
 
-/* Mrays/s of shooting SET with THREADS threads (0 when the set is empty). */
-static double shoot_rate(const bsp_accel *accel, const bench_ray_set *set, int any, int threads)
+/* Mrays/s of shooting SET with THREADS threads (bsp_intersect_batch or
+ * bsp_occluded_batch, into HITS or OCC, of room for SET->n answers); 0 when
+ * the set is empty or the batch fails. */
+static double shoot_rate(const bsp_accel *accel, const bench_ray_set *set, int any, int threads,
+                         bsp_hit *hits, unsigned char *occ)
 {
     if (set->n == 0)
         return 0.0;
-    shoot_job jobs[256];
-    pthread_t tids[256];
-    if (threads > 256)
-        threads = 256;
-    for (int t = 0; t < threads; t++) {
-        jobs[t] = (shoot_job){accel, set->rays, set->from, set->n * (size_t)t / (size_t)threads,
-                              set->n * (size_t)(t + 1) / (size_t)threads, any, 0, 0};
-    }
     /* one thread: its CPU time, steadier than the wall clock on a shared
      * machine (time the thread spends descheduled is not its own) */
     const int cpu = threads == 1;
     double t0 = cpu ? bench_cpu_seconds() : now_seconds();
-    int started = 1;
-    for (; started < threads; started++)
-        if (pthread_create(&tids[started], NULL, shoot_main, &jobs[started]) != 0)
-            break;
-    shoot_main(&jobs[0]);
-    for (int t = 1; t < started; t++)
-        pthread_join(tids[t], NULL);
-    for (int t = started; t < threads; t++) /* threads that could not start */
-        shoot_main(&jobs[t]);
+    bsp_error err;
+    bsp_status st = any ? bsp_occluded_batch(accel, set->rays, set->from, set->n, threads, occ,
+                                             NULL, &err)
+                        : bsp_intersect_batch(accel, set->rays, set->from, set->n, threads, hits,
+                                              NULL, &err);
     double dt = (cpu ? bench_cpu_seconds() : now_seconds()) - t0;
+    if (st != BSP_OK) {
+        fprintf(stderr, "%s: %s\n", prog, err.message);
+        return 0.0;
+    }
     return dt > 0 ? (double)set->n / dt * 1e-6 : 0.0;
 }
 
@@ -504,14 +470,22 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
             continue;
         }
         int any = c == BSP_RAY_SHADOW;
+        bsp_hit *hits = any ? NULL : malloc(sets[c].n * sizeof *hits);
+        unsigned char *occ = any ? malloc(sets[c].n) : NULL;
+        if (sets[c].n > 0 && !hits && !occ) {
+            fprintf(stderr, "%s: out of memory for the answers of %zu rays\n", prog, sets[c].n);
+            continue;
+        }
         /* best of SHOOT_REPEATS: one pass takes well under a second, and
          * a shared machine disturbs single passes */
         for (int rep = 0; rep < SHOOT_REPEATS; rep++) {
-            double r1 = shoot_rate(accel, &sets[c], any, 1);
-            double rn = shoot_rate(accel, &sets[c], any, o->threads);
+            double r1 = shoot_rate(accel, &sets[c], any, 1, hits, occ);
+            double rn = shoot_rate(accel, &sets[c], any, o->threads, hits, occ);
             row.rate1[c] = r1 > row.rate1[c] ? r1 : row.rate1[c];
             row.raten[c] = rn > row.raten[c] ? rn : row.raten[c];
         }
+        free(hits);
+        free(occ);
     }
     bench_free_ray_sets(sets);
     print_row(&row);
@@ -606,8 +580,7 @@ int cmd_bench(int argc, char **argv)
     o.mailbox = 1;
     o.nvalidate = 20000;
     o.repeat = 3;
-    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-    o.threads = ncpu > 0 ? (int)ncpu : 1;
+    o.threads = default_threads();
     /* the default methods: naive, kaplan, sah (the view rules: --accel, or --paper) */
     for (int k = BSP_ACCEL_NAIVE; k <= BSP_ACCEL_SAH; k++)
         o.kinds[o.nkinds++] = (bsp_accel_kind)k;
@@ -656,7 +629,7 @@ int cmd_bench(int argc, char **argv)
         free(scenes);
         return EXIT_INPUT;
     }
-    if (plot_path && !plot_path_writable(plot_path)) { /* before minutes of renders */
+    if (plot_path && !output_path_writable(plot_path)) { /* before minutes of renders */
         free(rows);
         free(scenes);
         return EXIT_INPUT;

@@ -21,7 +21,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "bench.h"
 #include "cli.h"
@@ -412,8 +411,7 @@ int bench_scaling(int argc, char **argv)
     memset(&o, 0, sizeof o);
     o.kinds[o.nkinds++] = BSP_ACCEL_SAH;
     o.repeat = 3;
-    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-    o.threads = ncpu > 0 ? (int)ncpu : 1;
+    o.threads = default_threads();
     const char *csv_path = NULL, *plot_path = NULL;
     const char **scenes = bench_scene_array(argc, bench_scaling_default_scenes);
     int nscenes = 0;
@@ -449,7 +447,7 @@ int bench_scaling(int argc, char **argv)
             scenes[nscenes++] = s;
         }
     }
-    if (plot_path && !plot_path_writable(plot_path)) { /* before minutes of builds */
+    if (plot_path && !output_path_writable(plot_path)) { /* before minutes of builds */
         free(scenes);
         return EXIT_INPUT;
     }

@@ -2,7 +2,7 @@
  * bspray.c — the command-line tool, a client of include/bspray only.
  *
  *   bspray render SCENE [options]   Whitted render to PNG/PPM + ray statistics
- *   bspray trace  SCENE --rays FILE batch closest-hit / occlusion queries
+ *   bspray trace  SCENE --rays FILE batch closest-hit / occlusion queries (trace.c)
  *   bspray stats  SCENE             what a scene contains
  *   bspray gen    NAME              a built-in SPD scene as NFF text
  *   bspray bench  [SCENE...]        build, validate and time methods (bench.c)
@@ -154,14 +154,9 @@ static int write_stats_json(const char *path, const char *scene_name, const char
                               *R = &st->cls[BSP_RAY_SECONDARY];
     uint64_t all = P->rays + S->rays + R->rays;
     uint64_t tests = P->isect_tests + S->isect_tests + R->isect_tests;
-    fprintf(f, "{\n  \"scene\": \"");
-    for (const char *c = scene_name; *c; c++) {
-        if (*c == '"' || *c == '\\')
-            fputc('\\', f);
-        if ((unsigned char)*c >= 0x20)
-            fputc(*c, f);
-    }
-    fprintf(f, "\",\n  \"accel\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n", accel_name,
+    fprintf(f, "{\n  \"scene\": ");
+    json_string(f, scene_name);
+    fprintf(f, ",\n  \"accel\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n", accel_name,
             st->width, st->height);
     fprintf(f, "  \"max_depth\": %d,\n  \"threads\": %d,\n", st->max_depth, st->threads);
     fprintf(f, "  \"PrimaryRay\": %" PRIu64 ",\n  \"UsedIntPrimRay\": %" PRIu64 ",\n", P->rays,
@@ -302,184 +297,6 @@ static int cmd_render(int argc, char **argv)
             fprintf(stderr, "%s: wrote %s\n", prog, out_path);
     }
     bsp_image_destroy(img);
-    bsp_accel_destroy(accel);
-    bsp_scene_destroy(scene);
-    return rc;
-}
-
-/* --- trace ------------------------------------------------------------------------- */
-
-static const char trace_usage[] =
-    "bspray trace SCENE --rays FILE [--any] [--accel METHOD] [--mailbox on|off]";
-
-static const char trace_help[] =
-    "Shoot the rays of FILE ('-' for standard input) into SCENE, one query per line.\n"
-    "\n"
-    "Input: one ray per line, 'ox oy oz dx dy dz [tmin tmax [from]]' (blank lines and\n"
-    "lines starting with '#' are skipped). The direction need not be unit length: t is\n"
-    "in units of the given direction. tmin defaults to 0 and tmax to infinity ('inf').\n"
-    "from: the 0-based index of a primitive the query leaves out, the one a shadow or\n"
-    "reflected ray starts on (bsp_intersect_from), or -1 for none (the default).\n"
-    "\n"
-    "Output: one line per ray, 'hit INDEX T' (INDEX the 0-based primitive index in file\n"
-    "order, T printed with %.9g) or 'miss'; with --any, 'occluded' or 'clear' for the\n"
-    "segment [tmin, tmax]. Ties at equal t go to the lowest index.\n"
-    "\n"
-    "  --rays FILE        the rays (required)\n"
-    "  --any              occlusion queries instead of closest hits\n"
-    "  --accel METHOD     acceleration method: sah (default), kaplan, naive\n"
-    "  --mailbox on|off   test each primitive at most once per ray (default on)\n";
-
-/* Parses one number of a ray line; accepts inf/-inf only where ALLOW_INF. */
-/* A direction whose length lies in [1e-100, 1e100]: t counts lengths of the
- * direction, so a shorter or longer one can put a hit's t past the doubles
- * (a hit at t = inf) or its square past the kernels' range. */
-static int ray_direction_in_range(double x, double y, double z)
-{
-    double m = fmax(fabs(x), fmax(fabs(y), fabs(z)));
-    if (!(m > 0.0))
-        return 0;
-    /* the length, scaled so that its square cannot overflow */
-    x /= m;
-    y /= m;
-    z /= m;
-    double len = m * sqrt(x * x + y * y + z * z);
-    return len >= 1e-100 && len <= 1e100;
-}
-
-static int ray_number(char **p, double *out, int allow_inf)
-{
-    char *end;
-    while (**p == ' ' || **p == '\t')
-        (*p)++;
-    if (!**p || **p == '\n' || **p == '\r')
-        return 0;
-    double x = strtod(*p, &end);
-    if (end == *p || (*end && *end != ' ' && *end != '\t' && *end != '\n' && *end != '\r'))
-        return -1;
-    if (isnan(x) || (isinf(x) && !allow_inf))
-        return -1;
-    *out = x;
-    *p = end;
-    return 1;
-}
-
-static int cmd_trace(int argc, char **argv)
-{
-    args a = {argc, 1, argv, trace_usage};
-    const char *scene_path = NULL, *rays_path = NULL;
-    int any = 0;
-    bsp_build_options bopts;
-    bsp_build_options_defaults(&bopts);
-    for (; a.i < argc; a.i++) {
-        const char *s = argv[a.i];
-        if (is_help(s)) {
-            printf("usage: %s\n\n%s", trace_usage, trace_help);
-            return 0;
-        } else if (!strcmp(s, "--rays")) {
-            rays_path = opt_value(&a, s);
-        } else if (!strcmp(s, "--any")) {
-            any = 1;
-        } else if (!strcmp(s, "--accel")) {
-            parse_accel(&a, &bopts);
-        } else if (!strcmp(s, "--mailbox")) {
-            bopts.mailbox = parse_on_off(&a, s);
-        } else {
-            take_operand(&a, &scene_path);
-        }
-    }
-    if (!scene_path)
-        die_usage(a.usage, "%s", "missing SCENE");
-    if (!rays_path)
-        die_usage(a.usage, "%s", "missing --rays FILE");
-    FILE *in = strcmp(rays_path, "-") ? fopen(rays_path, "r") : stdin;
-    if (!in) {
-        fprintf(stderr, "%s: %s: cannot open: %s\n", prog, rays_path, strerror(errno));
-        return EXIT_INPUT;
-    }
-    bsp_scene *scene = load_scene(scene_path);
-    bsp_accel *accel = build_accel(scene, &bopts);
-    bsp_query *q = bsp_query_create(accel);
-    int rc = 0;
-    if (!q) {
-        fprintf(stderr, "%s: out of memory\n", prog);
-        rc = EXIT_INPUT;
-    }
-    char *line = NULL;
-    size_t cap = 0, lineno = 0;
-    ssize_t len;
-    while (rc == 0 && (len = getline(&line, &cap, in)) >= 0) {
-        lineno++;
-        char *p = line;
-        while (*p == ' ' || *p == '\t')
-            p++;
-        if (!*p || *p == '\n' || *p == '\r' || *p == '#')
-            continue;
-        double v[8] = {0, 0, 0, 0, 0, 0, 0, INFINITY};
-        int n = 0, r;
-        while (n < 8 && (r = ray_number(&p, &v[n], n >= 6)) == 1)
-            n++;
-        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n')
-            p++;
-        const char *bad = NULL;
-        long long from = -1; /* the primitive left out, after tmin and tmax */
-        if (n == 8 && *p) {
-            char *e;
-            errno = 0;
-            from = strtoll(p, &e, 10);
-            if (e == p || errno || !(*e == 0 || *e == ' ' || *e == '\t' || *e == '\r' ||
-                                     *e == '\n'))
-                bad = "malformed origin primitive (expected an integer index, or -1)";
-            else if (from < -1 || from >= (long long)bsp_scene_prim_count(scene))
-                bad = "origin primitive out of range (a primitive index of the scene, or -1)";
-            for (p = e; *p == ' ' || *p == '\t' || *p == '\r' || *p == '\n';)
-                p++;
-        }
-        if (bad)
-            ;
-        else if (n < 8 && r < 0)
-            bad = "malformed or non-finite number";
-        else if (*p)
-            bad = "too many fields (expected 'ox oy oz dx dy dz [tmin tmax [from]]')";
-        else if (n != 6 && n != 8)
-            bad = "expected 6 or 8 numbers: 'ox oy oz dx dy dz [tmin tmax [from]]'";
-        else if (v[3] == 0 && v[4] == 0 && v[5] == 0)
-            bad = "the direction is the zero vector";
-        else if (fabs(v[0]) > BSP_SCENE_MAX_COORD || fabs(v[1]) > BSP_SCENE_MAX_COORD ||
-                 fabs(v[2]) > BSP_SCENE_MAX_COORD)
-            bad = "origin out of range (coordinates must lie within +-1e+30, as a scene's)";
-        else if (!ray_direction_in_range(v[3], v[4], v[5]))
-            bad = "direction length outside [1e-100, 1e100]: t is measured in units of the "
-                  "direction, so scale it";
-        else if (isinf(v[6]) && v[6] > 0)
-            bad = "tmin is +inf";
-        else if (v[7] < v[6])
-            bad = "tmax is smaller than tmin";
-        if (bad) {
-            fprintf(stderr, "%s: %s:%zu: %s\n", prog, rays_path, lineno, bad);
-            rc = EXIT_INPUT;
-            break;
-        }
-        bsp_ray ray = {bsp_v3(v[0], v[1], v[2]), bsp_v3(v[3], v[4], v[5]), v[6], v[7]};
-        const uint32_t origin = from < 0 ? BSP_NO_PRIM : (uint32_t)from;
-        if (any) {
-            puts(bsp_occluded_from(accel, q, &ray, origin) ? "occluded" : "clear");
-        } else {
-            bsp_hit hit;
-            if (bsp_intersect_from(accel, q, &ray, origin, &hit))
-                printf("hit %" PRIu32 " %.9g\n", hit.prim, hit.t + 0.0); /* -0 prints as 0 */
-            else
-                puts("miss");
-        }
-    }
-    free(line);
-    if (in != stdin)
-        fclose(in);
-    if (fflush(stdout) != 0) {
-        fprintf(stderr, "%s: write failed: %s\n", prog, strerror(errno));
-        rc = EXIT_INPUT;
-    }
-    bsp_query_destroy(q);
     bsp_accel_destroy(accel);
     bsp_scene_destroy(scene);
     return rc;

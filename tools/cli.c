@@ -205,6 +205,24 @@ double now_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+int default_threads(void)
+{
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n > 0 ? (int)n : 1;
+}
+
+void json_string(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (; *s; s++) {
+        if (*s == '"' || *s == '\\')
+            fputc('\\', f);
+        if ((unsigned char)*s >= 0x20)
+            fputc(*s, f);
+    }
+    fputc('"', f);
+}
+
 /* The number TEXT of option OPT, or a usage error saying WHAT it must be
  * when it is not a whole number string or fails OK. */
 static double parse_real(args *a, const char *opt, const char *text, int (*ok)(double),
@@ -516,7 +534,7 @@ fail:
     exit(EXIT_INPUT);
 }
 
-int plot_path_writable(const char *path)
+int output_path_writable(const char *path)
 {
     const int existed = access(path, F_OK) == 0;
     FILE *f = fopen(path, "ab"); /* appends nothing: the file stays as it is */

@@ -5,6 +5,8 @@
 #ifndef BSPRAY_TOOLS_CLI_H
 #define BSPRAY_TOOLS_CLI_H
 
+#include <stdio.h>
+
 #include "bspray/bspray.h"
 
 #define EXIT_INPUT 1 /* bad input or failure at run time */
@@ -26,7 +28,7 @@ const char *opt_value(args *a, const char *opt);
 /* Whether PATH can be written (checked before a long run that writes it at
  * the end): 1, or 0 with a message naming it. Leaves no file behind that
  * was not there. */
-int plot_path_writable(const char *path);
+int output_path_writable(const char *path);
 /* A whole number in [LO, HI] as the value of OPT, or a usage error. */
 int parse_int(args *a, const char *opt, long lo, long hi);
 int parse_on_off(args *a, const char *opt);
@@ -95,10 +97,16 @@ bsp_scene *load_scene(const char *path);
 bsp_accel *build_accel(const bsp_scene *scene, const bsp_build_options *opts);
 /* Seconds on a monotonic clock. */
 double now_seconds(void);
+/* The number of cores online (at least 1): the default of every --threads. */
+int default_threads(void);
+/* Writes S to F as a JSON string (quoted; quotes and backslashes escaped,
+ * control characters dropped). */
+void json_string(FILE *f, const char *s);
 
 /* The subcommands. */
 int cmd_bench(int argc, char **argv);
 int cmd_viz(int argc, char **argv);
 int cmd_ab(int argc, char **argv);
+int cmd_trace(int argc, char **argv);
 
 #endif /* BSPRAY_TOOLS_CLI_H */

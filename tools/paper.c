@@ -580,7 +580,7 @@ int bench_paper(int argc, char **argv)
             scenes[nscenes++] = s;
         }
     }
-    if (plot_path && !plot_path_writable(plot_path)) { /* before minutes of renders */
+    if (plot_path && !output_path_writable(plot_path)) { /* before minutes of renders */
         free(scenes);
         return EXIT_INPUT;
     }

@@ -306,4 +306,20 @@ int bsp_intersect_from(const bsp_accel *accel, bsp_query *query, const bsp_ray *
 int bsp_occluded_from(const bsp_accel *accel, bsp_query *query, const bsp_ray *ray,
                       uint32_t from);
 
+/* Batches: the N queries of RAYS[0..N) on THREADS threads (0 or less: every
+ * core), each thread with a query of its own. bsp_intersect_batch writes
+ * ray i's closest hit to HITS[i] (prim BSP_NO_PRIM on a miss);
+ * bsp_occluded_batch writes 1 or 0 to OCCLUDED[i]. FROM, when not NULL, names
+ * the primitive each ray leaves out (as bsp_intersect_from; BSP_NO_PRIM:
+ * none). COUNTERS, when not NULL, receives the batch's counters, summed over
+ * its rays. The answers and counters are the same for any THREADS. Returns
+ * BSP_OK, BSP_ERR_INVALID (no structure, or NULL arrays for N > 0) or
+ * BSP_ERR_NOMEM (before any ray is shot). */
+bsp_status bsp_intersect_batch(const bsp_accel *accel, const bsp_ray *rays, const uint32_t *from,
+                               size_t n, int threads, bsp_hit *hits,
+                               bsp_query_counters *counters, bsp_error *err);
+bsp_status bsp_occluded_batch(const bsp_accel *accel, const bsp_ray *rays, const uint32_t *from,
+                              size_t n, int threads, unsigned char *occluded,
+                              bsp_query_counters *counters, bsp_error *err);
+
 #endif /* BSPRAY_ACCEL_H */
