@@ -14,12 +14,17 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "bspray/bspray.h"
+#include "util/progress.h"
 
 #include "cli.h"
 
 #define TRACE_BATCH 65536
+/* A run that takes longer than this draws a progress bar (on a terminal),
+ * by the share of the ray file read */
+#define TRACE_BAR_DELAY 0.5
 
 static const char trace_usage[] =
     "bspray trace SCENE --rays FILE [--any] [--threads N] [--exact] [--stats]\n"
@@ -66,6 +71,10 @@ typedef struct trace_batch {
 
 typedef struct trace_run {
     const bsp_accel *accel;
+    FILE *in;
+    double in_size; /* bytes of a regular ray file, else 0: no progress bar */
+    double start;
+    progress_bar *bar;
     int any, exact, threads;
     uint64_t rays, answered; /* queries, and hits (or occluded segments) among them */
     bsp_query_counters counters;
@@ -193,6 +202,11 @@ static int shoot_and_print(trace_run *run, trace_batch *b)
         }
     }
     b->n = 0;
+    if (run->in_size > 0.0) {
+        if (!run->bar && now_seconds() - run->start > TRACE_BAR_DELAY)
+            run->bar = progress_create(stderr, "trace");
+        progress_update(run->bar, (double)ftello(run->in) / run->in_size);
+    }
     return 1;
 }
 
@@ -324,12 +338,17 @@ int cmd_trace(int argc, char **argv)
         fprintf(stderr, "%s: %s: cannot open: %s\n", prog, rays_path, strerror(errno));
         return EXIT_INPUT;
     }
+    struct stat in_stat;
+    if (fstat(fileno(in), &in_stat) == 0 && S_ISREG(in_stat.st_mode))
+        run.in_size = (double)in_stat.st_size;
+    run.in = in;
     bsp_scene *scene = load_scene(scene_path);
     apply_view_args(scene, scene_path, &view, &bopts, NULL);
     bsp_accel *accel = build_accel(scene, &bopts);
     run.accel = accel;
     if (run.threads == 0)
         run.threads = default_threads();
+    run.start = now_seconds();
     const size_t nprims = bsp_scene_prim_count(scene);
     trace_batch b;
     int rc = 0;
@@ -362,6 +381,7 @@ int cmd_trace(int argc, char **argv)
     }
     if (rc == 0 && !shoot_and_print(&run, &b))
         rc = EXIT_INPUT;
+    progress_finish(run.bar);
     free(line);
     if (in != stdin)
         fclose(in);
