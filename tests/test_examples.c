@@ -1,0 +1,112 @@
+/*
+ * test_examples.c — the programs of examples/, built against the public
+ * headers alone (Makefile), run and checked against the naive method: the
+ * centre ray's primitive and t bit for bit, the shadow answer, and the number
+ * of grid rays that hit.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bspray/bspray.h"
+#include "harness.h"
+#include "kd_test_util.h"
+
+/* examples/NAME's binary beside the CLI's build directory (BUF: room). */
+static const char *example_path(const char *name, char *buf, size_t size)
+{
+    const char *cli = harness_cli();
+    const char *slash = strrchr(cli, '/');
+    int dir = slash ? (int)(slash - cli) : 0;
+    snprintf(buf, size, "%.*s%sexamples/%s", dir, cli, slash ? "/" : "", name);
+    return buf;
+}
+
+/* The number of rays of examples/shoot.c's G x G grid around the centre
+ * ray that the naive method sees hit something (the grid as shoot.c makes
+ * it: R and U perpendicular to the view and as long as it). */
+static size_t naive_grid_hits(const bsp_accel *naive, bsp_query *q, bsp_vec3 eye, bsp_vec3 dir,
+                              bsp_vec3 up, int g)
+{
+    bsp_vec3 r = bsp_v3(dir.y * up.z - dir.z * up.y, dir.z * up.x - dir.x * up.z,
+                        dir.x * up.y - dir.y * up.x);
+    bsp_vec3 u = bsp_v3(r.y * dir.z - r.z * dir.y, r.z * dir.x - r.x * dir.z,
+                        r.x * dir.y - r.y * dir.x);
+    double len = sqrt(dir.x * dir.x + dir.y * dir.y + dir.z * dir.z);
+    double rl = sqrt(r.x * r.x + r.y * r.y + r.z * r.z), ul = sqrt(u.x * u.x + u.y * u.y + u.z * u.z);
+    size_t hits = 0;
+    bsp_hit h;
+    for (int j = 0; j < g; j++)
+        for (int i = 0; i < g; i++) {
+            double a = ((i + 0.5) / g - 0.5) * len / rl, b = ((j + 0.5) / g - 0.5) * len / ul;
+            bsp_ray ray = {eye,
+                           bsp_v3(dir.x + a * r.x + b * u.x, dir.y + a * r.y + b * u.y,
+                                  dir.z + a * r.z + b * u.z),
+                           0.0, INFINITY};
+            hits += (size_t)bsp_intersect(naive, q, &ray, &h);
+        }
+    return hits;
+}
+
+/* the side of the grid the test asks for: the naive method shoots it too */
+#define GRID 48
+
+TEST(example_shoot_gives_the_naive_answers)
+{
+    char exe[1024];
+    example_path("shoot", exe, sizeof exe);
+    static const char *const scenes[] = {"spd:teapot", "spd:tree"};
+    for (size_t sc = 0; sc < 2; sc++) {
+        char cmd[2048];
+        snprintf(cmd, sizeof cmd, "%s %s %d", exe, scenes[sc], GRID);
+        int status;
+        char *out = harness_run(cmd, &status);
+        REQUIRE(out);
+        CHECK_MSG(status == 0, "'%s' exited with %d: %s", cmd, status, out);
+        bsp_scene *s = kd_test_load(scenes[sc]);
+        bsp_accel *naive = kd_test_build(s, BSP_ACCEL_NAIVE);
+        bsp_query *q = bsp_query_create(naive);
+        REQUIRE(q);
+        const bsp_camera *cam = bsp_scene_camera(s);
+        REQUIRE(cam);
+        bsp_vec3 dir = bsp_v3(cam->at.x - cam->from.x, cam->at.y - cam->from.y,
+                              cam->at.z - cam->from.z);
+        bsp_ray ray = {cam->from, dir, 0.0, INFINITY};
+        bsp_hit h;
+        REQUIRE(bsp_intersect(naive, q, &ray, &h)); /* both views look at the model */
+        unsigned prim = 0;
+        char tbuf[64] = "";
+        const char *line = strstr(out, "centre ray: primitive ");
+        CHECK_MSG(line && sscanf(line, "centre ray: primitive %u at t = %63s", &prim, tbuf) == 2,
+                  "%s: '%s'", scenes[sc], out);
+        double t = strtod(tbuf, NULL);
+        CHECK_MSG(prim == h.prim && memcmp(&t, &h.t, sizeof t) == 0,
+                  "%s: primitive %u at %s, naive %u at %.17g", scenes[sc], prim, tbuf, h.prim,
+                  h.t);
+        bsp_vec3 p = bsp_v3(cam->from.x + h.t * dir.x, cam->from.y + h.t * dir.y,
+                            cam->from.z + h.t * dir.z);
+        bsp_vec3 l = bsp_scene_light(s, 0)->pos;
+        bsp_ray shadow = {p, bsp_v3(l.x - p.x, l.y - p.y, l.z - p.z), 0.0, 1.0};
+        int blocked = bsp_occluded_from(naive, q, &shadow, h.prim);
+        CHECK_STR_CONTAINS(out, blocked ? "light 0 is blocked" : "light 0 is visible");
+        size_t want = naive_grid_hits(naive, q, cam->from, dir, cam->up, GRID), got = 0;
+        line = strstr(out, "grid: ");
+        CHECK_MSG(line && sscanf(line, "grid: %zu of %*d", &got) == 1, "'%s'", out);
+        CHECK_MSG(got == want, "%s: %zu grid rays hit, naive %zu", scenes[sc], got, want);
+        CHECK_MSG(want > GRID && want < GRID * GRID, "%s: %zu grid hits", scenes[sc], want);
+        bsp_query_destroy(q);
+        bsp_accel_destroy(naive);
+        bsp_scene_destroy(s);
+        free(out);
+    }
+    /* a scene that cannot be loaded: a message and exit status 1 */
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "%s /nonexistent/x.nff 2>&1", exe);
+    int status;
+    char *out = harness_run(cmd, &status);
+    REQUIRE(out);
+    CHECK_EQ_INT(status, 1);
+    CHECK_STR_CONTAINS(out, "/nonexistent/x.nff");
+    free(out);
+}
