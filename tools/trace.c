@@ -52,13 +52,10 @@ static const char trace_help[] =
     "                     very double (compare methods bit for bit)\n"
     "  --stats            print the figures of the run on stderr as a Markdown table:\n"
     "                     rays, hits, N_IT, N_TS, N_ETS, N_EETS and mailbox hits per ray,\n"
-    "                     the tree's N_IN, N_V, N_EV, N_OIV, T_B, T_TR and Mrays/s\n"
-    "  --stats-json FILE  write the same figures as JSON\n"
-    "  --eye, --at, --dir, --up, --fov, --ortho  the camera the view rules (sah-per,\n"
-    "                     sah-par, sah-mixed) build for (see 'bspray render --help')\n"
-    "\n"
-    "T_TR is the wall-clock time of the queries alone (reading and printing excluded).\n"
-    "\n";
+    "                     the tree's N_IN, N_V, N_EV, N_OIV, T_B, T_TR (the wall-clock\n"
+    "                     time of the queries alone, reading and printing excluded) and\n"
+    "                     Mrays/s\n"
+    "  --stats-json FILE  write the same figures as JSON\n";
 
 /* One query of the file. */
 typedef struct trace_batch {
