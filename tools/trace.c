@@ -57,7 +57,7 @@ static const char trace_help[] =
     "                     Mrays/s\n"
     "  --stats-json FILE  write the same figures as JSON\n";
 
-/* One query of the file. */
+/* A batch of the file's rays and room for their answers. */
 typedef struct trace_batch {
     bsp_ray *rays;
     uint32_t *from;
