@@ -3,7 +3,8 @@
  * bsp_occluded_batch) and `bspray trace --threads/--exact/--stats-json`:
  * every answer is the one a single query of the naive method gives for the
  * same ray, bit for bit, for any number of threads, and the counters are
- * the sums a plain loop of single queries counts.
+ * the sums a plain loop of single queries counts. And `render --save-rays`:
+ * the rays a render casts, replayed through trace, give the render's counts.
  */
 #include <inttypes.h>
 #include <math.h>
@@ -338,4 +339,95 @@ TEST(cli_trace_threads_exact_and_stats)
     bsp_scene_destroy(s);
     free(rays);
     free(from);
+}
+
+/* Lines of PATH that begin with PREFIX. */
+static long count_lines(const char *path, const char *prefix)
+{
+    char *s = read_file(path);
+    if (!s)
+        return -1;
+    long n = 0;
+    size_t len = strlen(prefix);
+    for (const char *p = s; *p;) {
+        n += !strncmp(p, prefix, len);
+        const char *nl = strchr(p, '\n');
+        if (!nl)
+            break;
+        p = nl + 1;
+    }
+    free(s);
+    return n;
+}
+
+TEST(cli_render_saved_rays_replay_to_the_render_counts)
+{
+    /* the rays a render casts, replayed through trace by the naive method and
+     * by the default tree, give the render's own counts of hits */
+    static const char *const scenes[] = {"spd:balls", "spd:rings"};
+    for (size_t sc = 0; sc < 2; sc++) {
+        char prefix[600], json[700], cmd[4096], path[800];
+        snprintf(prefix, sizeof prefix, "%s/saved_%zu", harness_tmpdir(), sc);
+        snprintf(json, sizeof json, "%s.json", prefix);
+        snprintf(cmd, sizeof cmd,
+                 "%s render %s --res 25 --save-rays %s --stats-json %s -o %s.png --quiet 2>&1",
+                 harness_cli(), scenes[sc], prefix, json, prefix);
+        int status;
+        char *out = harness_run(cmd, &status);
+        REQUIRE(out);
+        CHECK_MSG(status == 0, "%s", out);
+        free(out);
+        char *j = read_file(json);
+        REQUIRE(j);
+        static const struct {
+            const char *cls, *rays, *hits, *yes;
+            int any;
+        } classes[] = {{"primary", "PrimaryRay", "UsedIntPrimRay", "hit ", 0},
+                       {"shadow", "ShadowRay", "UsedIntShadRay", "occluded", 1},
+                       {"secondary", "SecondaryRay", "UsedIntSecRay", "hit ", 0}};
+        for (int c = 0; c < 3; c++) {
+            snprintf(path, sizeof path, "%s-%s.txt", prefix, classes[c].cls);
+            long want_rays = (long)json_number(j, classes[c].rays);
+            long want_hits = (long)json_number(j, classes[c].hits);
+            CHECK_MSG(want_rays > 0 && count_lines(path, "") == want_rays,
+                      "%s %s: %ld lines, %ld rays", scenes[sc], classes[c].cls,
+                      count_lines(path, ""), want_rays);
+            char *first = NULL;
+            for (int naive = 0; naive < 2; naive++) {
+                char answers[900];
+                snprintf(answers, sizeof answers, "%s-%s.%d.out", prefix, classes[c].cls, naive);
+                snprintf(cmd, sizeof cmd, "%s trace %s --rays %s --exact%s%s > %s",
+                         harness_cli(), scenes[sc], path, classes[c].any ? " --any" : "",
+                         naive ? " --accel naive" : "", answers);
+                char *o = harness_run(cmd, &status);
+                free(o);
+                CHECK_EQ_INT(status, 0);
+                CHECK_MSG(count_lines(answers, classes[c].yes) == want_hits,
+                          "%s %s (%s): %ld answers '%s', the render counted %ld", scenes[sc],
+                          classes[c].cls, naive ? "naive" : "sah",
+                          count_lines(answers, classes[c].yes), classes[c].yes, want_hits);
+                char *a = read_file(answers);
+                REQUIRE(a);
+                if (!first)
+                    first = a;
+                else {
+                    CHECK_MSG(!strcmp(a, first), "%s %s: naive and sah differ", scenes[sc],
+                              classes[c].cls);
+                    free(a);
+                }
+            }
+            free(first);
+        }
+        free(j);
+    }
+    /* an unwritable prefix fails before the render, naming the file */
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "%s render spd:balls --res 9 --save-rays /nonexistent/dir/r 2>&1",
+             harness_cli());
+    int status;
+    char *out = harness_run(cmd, &status);
+    REQUIRE(out);
+    CHECK_EQ_INT(status, 1);
+    CHECK_STR_CONTAINS(out, "/nonexistent/dir/r-primary.txt: cannot open for writing");
+    free(out);
 }

@@ -30,7 +30,7 @@ static const char render_usage[] =
     "bspray render SCENE [-o OUT.png|OUT.ppm] [--res N | --size WxH] [--depth N]\n"
     "                    [--sampling spd|centres] [--accel METHOD] [--mailbox on|off]\n"
     "                    [--max-depth N] [--leaf-size N] [--mixed-share F]\n"
-    "                    [--threads N] [--stats-json FILE] [--quiet]\n"
+    "                    [--threads N] [--stats-json FILE] [--save-rays PREFIX] [--quiet]\n"
     "                    [--eye X,Y,Z] [--at X,Y,Z | --dir X,Y,Z] [--up X,Y,Z] [--fov DEG]\n"
     "                    [--ortho W|auto]";
 
@@ -57,7 +57,61 @@ static const char render_help[] =
     "                     Havran's setting; the SPD Readme calls it depth 5)\n"
     "  --threads N        worker threads (default: all cores); the image does not depend on it\n"
     "  --stats-json FILE  also write the statistics as JSON\n"
+    "  --save-rays PREFIX also write every ray the render casts, in the format of\n"
+    "                     'bspray trace' ('ox oy oz dx dy dz tmin tmax from', %.17g), one\n"
+    "                     file per class: PREFIX-primary.txt, PREFIX-shadow.txt (replay\n"
+    "                     with 'trace --any') and PREFIX-secondary.txt; the render then\n"
+    "                     runs on one thread, so the files list the rays in the order\n"
+    "                     they are cast\n"
     "  --quiet            print no statistics table\n";
+
+/* --save-rays: one file per ray class, written by the render's ray log. */
+typedef struct ray_files {
+    FILE *f[BSP_RAY_CLASS_COUNT];
+    char path[BSP_RAY_CLASS_COUNT][4096];
+} ray_files;
+
+static const char *const ray_class_file[BSP_RAY_CLASS_COUNT] = {
+    [BSP_RAY_PRIMARY] = "primary", [BSP_RAY_SHADOW] = "shadow", [BSP_RAY_SECONDARY] = "secondary"};
+
+static void save_ray(bsp_ray_class cls, const bsp_ray *r, uint32_t from, void *ctx)
+{
+    FILE *f = ((ray_files *)ctx)->f[cls];
+    fprintf(f, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %lld\n", r->org.x, r->org.y,
+            r->org.z, r->dir.x, r->dir.y, r->dir.z, r->tmin, r->tmax,
+            from == BSP_NO_PRIM ? -1LL : (long long)from);
+}
+
+/* Opens PREFIX-CLASS.txt for each class; 0 with a message when one cannot be. */
+static int open_ray_files(ray_files *rf, const char *prefix)
+{
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
+        snprintf(rf->path[c], sizeof rf->path[c], "%s-%s.txt", prefix, ray_class_file[c]);
+        rf->f[c] = fopen(rf->path[c], "w");
+        if (!rf->f[c]) {
+            fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, rf->path[c],
+                    strerror(errno));
+            for (int k = 0; k < c; k++)
+                fclose(rf->f[k]);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* Closes the files; 0 with a message when a write failed. */
+static int close_ray_files(ray_files *rf)
+{
+    int ok = 1;
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
+        int bad = ferror(rf->f[c]);
+        if (fclose(rf->f[c]) != 0 || bad) {
+            fprintf(stderr, "%s: %s: write failed\n", prog, rf->path[c]);
+            ok = 0;
+        }
+    }
+    return ok;
+}
 
 typedef struct progress_ctx {
     progress_bar *bar;
@@ -206,7 +260,7 @@ static int write_stats_json(const char *path, const char *scene_name, const char
 static int cmd_render(int argc, char **argv)
 {
     args a = {argc, 1, argv, render_usage};
-    const char *scene_path = NULL, *out_path = "out.png", *json_path = NULL;
+    const char *scene_path = NULL, *out_path = "out.png", *json_path = NULL, *rays_prefix = NULL;
     int quiet = 0;
     view_args view = {0};
     bsp_build_options bopts;
@@ -249,6 +303,8 @@ static int cmd_render(int argc, char **argv)
             continue;
         } else if (!strcmp(s, "--stats-json")) {
             json_path = opt_value(&a, s);
+        } else if (!strcmp(s, "--save-rays")) {
+            rays_prefix = opt_value(&a, s);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             quiet = 1;
         } else {
@@ -266,6 +322,16 @@ static int cmd_render(int argc, char **argv)
         bsp_scene_destroy(scene);
         return EXIT_INPUT;
     }
+    ray_files rf;
+    if (rays_prefix) {
+        if (!open_ray_files(&rf, rays_prefix)) {
+            bsp_scene_destroy(scene);
+            return EXIT_INPUT;
+        }
+        ropts.ray_log = save_ray;
+        ropts.ray_log_ctx = &rf;
+        ropts.threads = 1; /* the rays in the order they are cast */
+    }
     bsp_accel *accel = build_accel(scene, &bopts);
     progress_ctx pc = {progress_create(stderr, "render")};
     ropts.progress = on_progress;
@@ -276,6 +342,8 @@ static int cmd_render(int argc, char **argv)
     bsp_status rs = bsp_render(accel, &ropts, &img, &st, &err);
     progress_finish(pc.bar);
     int rc = 0;
+    if (rays_prefix && !close_ray_files(&rf))
+        rc = EXIT_INPUT;
     if (rs != BSP_OK) {
         fprintf(stderr, "%s: %s: %s\n", prog, scene_path, err.message);
         rc = EXIT_INPUT;
