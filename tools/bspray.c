@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include "bspray/bspray.h"
+#include "render/costmap.h"
 #include "util/progress.h"
 
 #include "cli.h"
@@ -31,6 +32,7 @@ static const char render_usage[] =
     "                    [--sampling spd|centres] [--accel METHOD] [--mailbox on|off]\n"
     "                    [--max-depth N] [--leaf-size N] [--mixed-share F]\n"
     "                    [--threads N] [--stats-json FILE] [--save-rays PREFIX] [--quiet]\n"
+    "                    [--cost-map FILE.png [--cost-measure steps|tests|leaves|rays]]\n"
     "                    [--eye X,Y,Z] [--at X,Y,Z | --dir X,Y,Z] [--up X,Y,Z] [--fov DEG]\n"
     "                    [--ortho W|auto]";
 
@@ -63,6 +65,12 @@ static const char render_help[] =
     "                     with 'trace --any') and PREFIX-secondary.txt; the render then\n"
     "                     runs on one thread, so the files list the rays in the order\n"
     "                     they are cast\n"
+    "  --cost-map FILE    also draw where the work went: each pixel coloured by what its\n"
+    "                     rays cost (the primary ray and every ray it spawned), from dark\n"
+    "                     (none) to bright (the most), beside a colour bar with the scale;\n"
+    "                     .ppm writes PPM, anything else PNG\n"
+    "  --cost-measure M   what --cost-map shows: steps (traversal steps, the default),\n"
+    "                     tests (intersection tests), leaves (leaves visited) or rays\n"
     "  --quiet            print no statistics table\n";
 
 /* --save-rays: one file per ray class, written by the render's ray log. */
@@ -261,6 +269,8 @@ static int cmd_render(int argc, char **argv)
 {
     args a = {argc, 1, argv, render_usage};
     const char *scene_path = NULL, *out_path = "out.png", *json_path = NULL, *rays_prefix = NULL;
+    const char *cost_path = NULL;
+    costmap_measure cost_measure = COSTMAP_STEPS;
     int quiet = 0;
     view_args view = {0};
     bsp_build_options bopts;
@@ -305,6 +315,14 @@ static int cmd_render(int argc, char **argv)
             json_path = opt_value(&a, s);
         } else if (!strcmp(s, "--save-rays")) {
             rays_prefix = opt_value(&a, s);
+        } else if (!strcmp(s, "--cost-map")) {
+            cost_path = opt_value(&a, s);
+        } else if (!strcmp(s, "--cost-measure")) {
+            const char *v = opt_value(&a, s);
+            if (!costmap_measure_parse(v, &cost_measure))
+                die_usage(a.usage,
+                          "option '--cost-measure' takes steps, tests, leaves or rays, got '%s'",
+                          v);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             quiet = 1;
         } else {
@@ -321,6 +339,24 @@ static int cmd_render(int argc, char **argv)
                 scene_path);
         bsp_scene_destroy(scene);
         return EXIT_INPUT;
+    }
+    if (cost_path && !output_path_writable(cost_path)) {
+        bsp_scene_destroy(scene);
+        return EXIT_INPUT;
+    }
+    bsp_query_counters *costs = NULL;
+    int cost_w = 0, cost_h = 0;
+    if (cost_path) {
+        bsp_error serr;
+        if (bsp_render_size(scene, &ropts, &cost_w, &cost_h, &serr) != BSP_OK ||
+            !(costs = calloc((size_t)cost_w * (size_t)cost_h, sizeof *costs))) {
+            fprintf(stderr, "%s: %s: %s\n", prog, scene_path,
+                    costs ? serr.message : "out of memory for the cost map");
+            bsp_scene_destroy(scene);
+            return EXIT_INPUT;
+        }
+        ropts.pixel_costs = costs;
+        ropts.pixel_costs_count = (size_t)cost_w * (size_t)cost_h;
     }
     ray_files rf;
     if (rays_prefix) {
@@ -361,10 +397,22 @@ static int cmd_render(int argc, char **argv)
             print_stats_table(stdout, scene_path, an, &st, ropts.sampling, &tree, &chk);
         if (json_path && !write_stats_json(json_path, scene_path, an, &st, &tree, &chk))
             rc = EXIT_INPUT;
+        if (costs) {
+            bsp_image *map = costmap_draw(costs, cost_w, cost_h, cost_measure);
+            if (!map || bsp_image_write(map, cost_path, &err) != BSP_OK) {
+                fprintf(stderr, "%s: %s: %s\n", prog, cost_path,
+                        map ? err.message : "out of memory for the cost map");
+                rc = EXIT_INPUT;
+            } else if (!quiet) {
+                fprintf(stderr, "%s: wrote %s\n", prog, cost_path);
+            }
+            bsp_image_destroy(map);
+        }
         if (rc == 0 && !quiet)
             fprintf(stderr, "%s: wrote %s\n", prog, out_path);
     }
     bsp_image_destroy(img);
+    free(costs);
     bsp_accel_destroy(accel);
     bsp_scene_destroy(scene);
     return rc;

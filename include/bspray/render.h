@@ -108,9 +108,25 @@ typedef struct bsp_render_options {
      * this way.) */
     void (*ray_log)(bsp_ray_class cls, const bsp_ray *ray, uint32_t from, void *ctx);
     void *ray_log_ctx;
+    /* Per-pixel work, when not NULL: PIXEL_COSTS[y * width + x] receives the
+     * counters of every query made for pixel (x, y) — its primary ray and the
+     * shadow and secondary rays it spawns — summed (rays: how many). Room for
+     * PIXEL_COSTS_COUNT records, at least width * height of the render
+     * (bsp_render_size), or the render fails with BSP_ERR_INVALID. The
+     * counts are the same for any thread count, and over all pixels they sum
+     * to the statistics' counts. */
+    bsp_query_counters *pixel_costs;
+    size_t pixel_costs_count;
 } bsp_render_options;
 
 void bsp_render_options_defaults(bsp_render_options *opts);
+
+/* The size, in rays across and down, that bsp_render renders SCENE at with
+ * OPTS (NULL: the defaults): OPTS's width and height, or the camera's
+ * (bsp_sampling). BSP_ERR_INVALID when there is no camera or a size is
+ * negative. */
+bsp_status bsp_render_size(const bsp_scene *scene, const bsp_render_options *opts, int *width,
+                           int *height, bsp_error *err);
 
 /* Renders ACCEL's scene from its camera. On success *OUT owns a new image and
  * *STATS (if not NULL) holds the statistics. The image is identical whatever

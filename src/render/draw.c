@@ -154,14 +154,9 @@ void draw_fade(bsp_image *img)
     }
 }
 
-void draw_colormap(double t, float rgb[3])
+void draw_ramp(const float (*stops)[3], int nstops, double t, float rgb[3])
 {
-    /* shallow to deep: pale yellow, orange, red, magenta, violet, blue */
-    static const float stops[][3] = {
-        {1.00f, 0.97f, 0.55f}, {1.00f, 0.70f, 0.15f}, {0.95f, 0.30f, 0.20f},
-        {0.85f, 0.20f, 0.60f}, {0.55f, 0.30f, 0.95f}, {0.20f, 0.55f, 1.00f},
-    };
-    const int last = (int)(sizeof stops / sizeof stops[0]) - 1;
+    const int last = nstops - 1;
     if (!(t > 0))
         t = 0;
     if (t > 1)
@@ -173,6 +168,16 @@ void draw_colormap(double t, float rgb[3])
     float u = (float)(f - i);
     for (int c = 0; c < 3; c++)
         rgb[c] = stops[i][c] + u * (stops[i + 1][c] - stops[i][c]);
+}
+
+void draw_colormap(double t, float rgb[3])
+{
+    /* shallow to deep: pale yellow, orange, red, magenta, violet, blue */
+    static const float stops[][3] = {
+        {1.00f, 0.97f, 0.55f}, {1.00f, 0.70f, 0.15f}, {0.95f, 0.30f, 0.20f},
+        {0.85f, 0.20f, 0.60f}, {0.55f, 0.30f, 0.95f}, {0.20f, 0.55f, 1.00f},
+    };
+    draw_ramp(stops, (int)(sizeof stops / sizeof stops[0]), t, rgb);
 }
 
 /* --- text ------------------------------------------------------------------------- */

@@ -48,6 +48,9 @@ DRAW_HIDDEN void draw_fade(bsp_image *img);
 /* The colour map of depths: T = 0 (shallow) bright yellow, through orange,
  * red and violet, to T = 1 (deep) blue; T is clamped to [0, 1]. */
 DRAW_HIDDEN void draw_colormap(double t, float rgb[3]);
+/* The colour at T in [0, 1] (clamped) of the ramp through NSTOPS >= 2
+ * colours STOPS, evenly spaced, interpolated linearly. */
+DRAW_HIDDEN void draw_ramp(const float (*stops)[3], int nstops, double t, float rgb[3]);
 
 /* --- text: a 5 x 7 bitmap font (upper case, digits, a few signs) --------------------- */
 

@@ -240,10 +240,23 @@ static void trace(worker *w, const bsp_ray *ray, uint32_t from, int depth, bsp_r
     shade(w, ray, &hit, depth, out);
 }
 
+/* *TO = the counters of NOW less those of BEFORE. */
+static void counters_since(bsp_query_counters *to, const bsp_query_counters *now,
+                           const bsp_query_counters *before)
+{
+    to->rays = now->rays - before->rays;
+    to->isect_tests = now->isect_tests - before->isect_tests;
+    to->traversal_steps = now->traversal_steps - before->traversal_steps;
+    to->leaves_visited = now->leaves_visited - before->leaves_visited;
+    to->empty_leaves = now->empty_leaves - before->empty_leaves;
+    to->mailbox_hits = now->mailbox_hits - before->mailbox_hits;
+}
+
 static void render_rows(worker *w)
 {
     render_job *job = w->job;
     int width = job->img->width, height = job->img->height;
+    bsp_query_counters *costs = job->opts->pixel_costs;
     for (;;) {
         int y = atomic_fetch_add(&job->next_row, 1);
         if (y >= height)
@@ -252,7 +265,11 @@ static void render_rows(worker *w)
         for (int x = 0; x < width; x++) {
             bsp_ray r = camera_ray(&job->cam, x, y);
             double c[3];
+            const bsp_query_counters before = w->query->counters;
             trace(w, &r, BSP_NO_PRIM, 0, BSP_RAY_PRIMARY, c);
+            if (costs)
+                counters_since(&costs[(size_t)y * (size_t)width + (size_t)x],
+                               &w->query->counters, &before);
             for (int k = 0; k < 3; k++)
                 row[3 * x + k] = (float)c[k];
         }
@@ -287,6 +304,27 @@ static void add_stats(bsp_render_stats *to, const bsp_render_stats *from)
 
 #define RENDER_MAX_THREADS 256
 
+bsp_status bsp_render_size(const bsp_scene *scene, const bsp_render_options *opts_in,
+                           int *width, int *height, bsp_error *err)
+{
+    bsp_render_options opts;
+    if (opts_in)
+        opts = *opts_in;
+    else
+        bsp_render_options_defaults(&opts);
+    const bsp_camera *cam = opts.camera ? opts.camera : bsp_scene_camera(scene);
+    if (!cam)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                         "the scene has no camera (no 'v' block)");
+    if (opts.width < 0 || opts.height < 0)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "negative image size");
+    *width = opts.width;
+    *height = opts.height;
+    if (*width == 0 || *height == 0)
+        camera_default_size(cam, opts.sampling, width, height);
+    return BSP_OK;
+}
+
 bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts_in,
                       bsp_image **out, bsp_render_stats *stats, bsp_error *err)
 {
@@ -311,11 +349,14 @@ bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts_in,
     if (opts.max_depth < 0 || opts.max_depth > 64)
         return error_set(err, BSP_ERR_INVALID, NULL, 0, "ray depth %d is outside 0..64",
                          opts.max_depth);
-    if (opts.width < 0 || opts.height < 0)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0, "negative image size");
-    int width = opts.width, height = opts.height;
-    if (width == 0 || height == 0)
-        camera_default_size(cam, opts.sampling, &width, &height);
+    int width, height;
+    bsp_status sz = bsp_render_size(s, &opts, &width, &height, err);
+    if (sz != BSP_OK)
+        return sz;
+    if (opts.pixel_costs && opts.pixel_costs_count < (size_t)width * (size_t)height)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0,
+                         "room for %zu pixel costs, the render has %d x %d pixels",
+                         opts.pixel_costs_count, width, height);
     int threads = opts.threads;
     if (threads <= 0) {
         long n = sysconf(_SC_NPROCESSORS_ONLN);
