@@ -53,8 +53,8 @@ int main(int argc, char **argv)
         if (bsp_scene_light_count(scene) > 0) {
             /* a shadow ray from the hit to the light, leaving out the
              * primitive it starts on; t in [0, 1] spans the segment */
-            bsp_vec3 p = bsp_v3(eye.x + hit.t * dir.x, eye.y + hit.t * dir.y,
-                                eye.z + hit.t * dir.z);
+            bsp_vec3 p =
+                bsp_v3(eye.x + hit.t * dir.x, eye.y + hit.t * dir.y, eye.z + hit.t * dir.z);
             bsp_vec3 l = bsp_scene_light(scene, 0)->pos;
             bsp_ray shadow = {p, bsp_v3(l.x - p.x, l.y - p.y, l.z - p.z), 0.0, 1.0};
             printf("light 0 is %s\n",
@@ -77,10 +77,11 @@ int main(int argc, char **argv)
     bsp_vec3 up = cam ? cam->up : bsp_v3(0, 1, 0);
     bsp_vec3 r = bsp_v3(dir.y * up.z - dir.z * up.y, dir.z * up.x - dir.x * up.z,
                         dir.x * up.y - dir.y * up.x);
-    bsp_vec3 u = bsp_v3(r.y * dir.z - r.z * dir.y, r.z * dir.x - r.x * dir.z,
-                        r.x * dir.y - r.y * dir.x);
+    bsp_vec3 u =
+        bsp_v3(r.y * dir.z - r.z * dir.y, r.z * dir.x - r.x * dir.z, r.x * dir.y - r.y * dir.x);
     double len = sqrt(dir.x * dir.x + dir.y * dir.y + dir.z * dir.z);
-    double rl = sqrt(r.x * r.x + r.y * r.y + r.z * r.z), ul = sqrt(u.x * u.x + u.y * u.y + u.z * u.z);
+    double rl = sqrt(r.x * r.x + r.y * r.y + r.z * r.z),
+           ul = sqrt(u.x * u.x + u.y * u.y + u.z * u.z);
     if (!(rl > 0.0 && ul > 0.0)) { /* UP along DIR: any other axis will do */
         fprintf(stderr, "shoot: the view direction is parallel to up\n");
         return 1;
@@ -100,8 +101,8 @@ int main(int argc, char **argv)
     size_t n_hit = 0;
     for (size_t i = 0; i < (size_t)G * G; i++)
         n_hit += hits[i].prim != BSP_NO_PRIM;
-    printf("grid: %zu of %d rays hit; %.2f tests and %.2f traversal steps per ray\n", n_hit,
-           G * G, (double)c.isect_tests / (double)c.rays, (double)c.traversal_steps / (double)c.rays);
+    printf("grid: %zu of %d rays hit; %.2f tests and %.2f traversal steps per ray\n", n_hit, G * G,
+           (double)c.isect_tests / (double)c.rays, (double)c.traversal_steps / (double)c.rays);
     free(rays);
     free(hits);
     bsp_accel_destroy(accel);

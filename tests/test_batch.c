@@ -125,8 +125,8 @@ TEST(batch_matches_single_naive_queries_on_any_thread_count)
                     bad += hits[i].prim != ref[i].prim ||
                            (ref[i].prim != BSP_NO_PRIM &&
                             memcmp(&hits[i].t, &ref[i].t, sizeof ref[i].t) != 0);
-                CHECK_MSG(bad == 0, "%s method %d, %d threads: %zu closest hits differ",
-                          scenes[sc], method, threads, bad);
+                CHECK_MSG(bad == 0, "%s method %d, %d threads: %zu closest hits differ", scenes[sc],
+                          method, threads, bad);
                 CHECK_MSG(same_counters(&c, &want_hit),
                           "%s method %d, %d threads: counters (tests %" PRIu64 " vs %" PRIu64
                           ", steps %" PRIu64 " vs %" PRIu64 ")",
@@ -304,8 +304,8 @@ TEST(cli_trace_threads_exact_and_stats)
     REQUIRE(f);
     fprintf(f, "0 0 20 0 0 -1\n# comment\n0 0 20 0 0 -1\n0 0 20 0 0 nan\n");
     fclose(f);
-    snprintf(cmd, sizeof cmd, "%s trace spd:rings --rays %s --threads 2 2>/dev/null",
-             harness_cli(), bad_path);
+    snprintf(cmd, sizeof cmd, "%s trace spd:rings --rays %s --threads 2 2>/dev/null", harness_cli(),
+             bad_path);
     int status;
     char *out = harness_run(cmd, &status);
     REQUIRE(out);
@@ -325,8 +325,8 @@ TEST(cli_trace_threads_exact_and_stats)
     snprintf(where, sizeof where, "%s:4: malformed or non-finite number", bad_path);
     CHECK_STR_CONTAINS(out, where);
     free(out);
-    snprintf(cmd, sizeof cmd, "%s trace spd:rings --rays %s --stats 2>&1 >/dev/null",
-             harness_cli(), rays_path);
+    snprintf(cmd, sizeof cmd, "%s trace spd:rings --rays %s --stats 2>&1 >/dev/null", harness_cli(),
+             rays_path);
     out = harness_run(cmd, &status);
     REQUIRE(out);
     CHECK_EQ_INT(status, 0);
@@ -396,8 +396,8 @@ TEST(cli_render_saved_rays_replay_to_the_render_counts)
             for (int naive = 0; naive < 2; naive++) {
                 char answers[900];
                 snprintf(answers, sizeof answers, "%s-%s.%d.out", prefix, classes[c].cls, naive);
-                snprintf(cmd, sizeof cmd, "%s trace %s --rays %s --exact%s%s > %s",
-                         harness_cli(), scenes[sc], path, classes[c].any ? " --any" : "",
+                snprintf(cmd, sizeof cmd, "%s trace %s --rays %s --exact%s%s > %s", harness_cli(),
+                         scenes[sc], path, classes[c].any ? " --any" : "",
                          naive ? " --accel naive" : "", answers);
                 char *o = harness_run(cmd, &status);
                 free(o);

@@ -65,8 +65,7 @@ TEST(render_pixel_costs_sum_to_the_statistics_on_any_thread_count)
                 sum.mailbox_hits += c1[i].mailbox_hits;
                 /* at most every primitive for every ray; the primary ray at
                  * least every one but the one it may leave */
-                if (naive && !(c1[i].isect_tests <= c1[i].rays * np &&
-                               c1[i].isect_tests >= np - 1))
+                if (naive && !(c1[i].isect_tests <= c1[i].rays * np && c1[i].isect_tests >= np - 1))
                     naive_ok = 0;
             }
             CHECK(naive_ok);
@@ -236,8 +235,8 @@ TEST(cli_render_cost_map)
     for (size_t i = 0; i < 2; i++) {
         char args[700];
         snprintf(args, sizeof args, bad[i].args, harness_tmpdir());
-        snprintf(cmd, sizeof cmd, "%s render spd:balls --res 8 %s -o %s/c.png 2>&1",
-                 harness_cli(), args, harness_tmpdir());
+        snprintf(cmd, sizeof cmd, "%s render spd:balls --res 8 %s -o %s/c.png 2>&1", harness_cli(),
+                 args, harness_tmpdir());
         out = harness_run(cmd, &status);
         REQUIRE(out);
         CHECK_EQ_INT(status, bad[i].status);

@@ -31,10 +31,11 @@ static size_t naive_grid_hits(const bsp_accel *naive, bsp_query *q, bsp_vec3 eye
 {
     bsp_vec3 r = bsp_v3(dir.y * up.z - dir.z * up.y, dir.z * up.x - dir.x * up.z,
                         dir.x * up.y - dir.y * up.x);
-    bsp_vec3 u = bsp_v3(r.y * dir.z - r.z * dir.y, r.z * dir.x - r.x * dir.z,
-                        r.x * dir.y - r.y * dir.x);
+    bsp_vec3 u =
+        bsp_v3(r.y * dir.z - r.z * dir.y, r.z * dir.x - r.x * dir.z, r.x * dir.y - r.y * dir.x);
     double len = sqrt(dir.x * dir.x + dir.y * dir.y + dir.z * dir.z);
-    double rl = sqrt(r.x * r.x + r.y * r.y + r.z * r.z), ul = sqrt(u.x * u.x + u.y * u.y + u.z * u.z);
+    double rl = sqrt(r.x * r.x + r.y * r.y + r.z * r.z),
+           ul = sqrt(u.x * u.x + u.y * u.y + u.z * u.z);
     size_t hits = 0;
     bsp_hit h;
     for (int j = 0; j < g; j++)
@@ -70,8 +71,8 @@ TEST(example_shoot_gives_the_naive_answers)
         REQUIRE(q);
         const bsp_camera *cam = bsp_scene_camera(s);
         REQUIRE(cam);
-        bsp_vec3 dir = bsp_v3(cam->at.x - cam->from.x, cam->at.y - cam->from.y,
-                              cam->at.z - cam->from.z);
+        bsp_vec3 dir =
+            bsp_v3(cam->at.x - cam->from.x, cam->at.y - cam->from.y, cam->at.z - cam->from.z);
         bsp_ray ray = {cam->from, dir, 0.0, INFINITY};
         bsp_hit h;
         REQUIRE(bsp_intersect(naive, q, &ray, &h)); /* both views look at the model */
@@ -82,10 +83,9 @@ TEST(example_shoot_gives_the_naive_answers)
                   "%s: '%s'", scenes[sc], out);
         double t = strtod(tbuf, NULL);
         CHECK_MSG(prim == h.prim && memcmp(&t, &h.t, sizeof t) == 0,
-                  "%s: primitive %u at %s, naive %u at %.17g", scenes[sc], prim, tbuf, h.prim,
-                  h.t);
-        bsp_vec3 p = bsp_v3(cam->from.x + h.t * dir.x, cam->from.y + h.t * dir.y,
-                            cam->from.z + h.t * dir.z);
+                  "%s: primitive %u at %s, naive %u at %.17g", scenes[sc], prim, tbuf, h.prim, h.t);
+        bsp_vec3 p =
+            bsp_v3(cam->from.x + h.t * dir.x, cam->from.y + h.t * dir.y, cam->from.z + h.t * dir.z);
         bsp_vec3 l = bsp_scene_light(s, 0)->pos;
         bsp_ray shadow = {p, bsp_v3(l.x - p.x, l.y - p.y, l.z - p.z), 0.0, 1.0};
         int blocked = bsp_occluded_from(naive, q, &shadow, h.prim);

@@ -73,9 +73,9 @@ typedef struct trace_run {
     double start;
     progress_bar *bar;
     int any, exact, threads;
-    uint64_t rays, answered; /* queries, and hits (or occluded segments) among them */
-    bsp_query_counters counters;
-    double seconds; /* T_TR */
+    uint64_t answered;           /* hits (or occluded segments) among the queries */
+    bsp_query_counters counters; /* counters.rays: the queries */
+    double seconds;              /* T_TR */
 } trace_run;
 
 /* A direction whose length lies in [1e-100, 1e100]: t counts lengths of the
@@ -171,21 +171,16 @@ static int shoot_and_print(trace_run *run, trace_batch *b)
     bsp_query_counters c;
     bsp_error err;
     double t0 = now_seconds();
-    bsp_status st = run->any ? bsp_occluded_batch(run->accel, b->rays, b->from, b->n,
-                                                  run->threads, b->occluded, &c, &err)
-                             : bsp_intersect_batch(run->accel, b->rays, b->from, b->n,
-                                                   run->threads, b->hits, &c, &err);
+    bsp_status st = run->any ? bsp_occluded_batch(run->accel, b->rays, b->from, b->n, run->threads,
+                                                  b->occluded, &c, &err)
+                             : bsp_intersect_batch(run->accel, b->rays, b->from, b->n, run->threads,
+                                                   b->hits, &c, &err);
     run->seconds += now_seconds() - t0;
     if (st != BSP_OK) {
         fprintf(stderr, "%s: %s\n", prog, err.message);
         return 0;
     }
-    run->rays += c.rays;
-    run->counters.isect_tests += c.isect_tests;
-    run->counters.traversal_steps += c.traversal_steps;
-    run->counters.leaves_visited += c.leaves_visited;
-    run->counters.empty_leaves += c.empty_leaves;
-    run->counters.mailbox_hits += c.mailbox_hits;
+    bsp_query_counters_add(&run->counters, &c);
     for (size_t i = 0; i < b->n; i++) {
         if (run->any) {
             run->answered += b->occluded[i];
@@ -219,13 +214,13 @@ static void print_stats(FILE *f, const char *scene, const trace_run *r, const bs
     fprintf(f, "| scene | %s |\n", scene);
     fprintf(f, "| accel | %s |\n", bsp_accel_kind_name(bsp_accel_get_kind(r->accel)));
     fprintf(f, "| queries | %s |\n", r->any ? "occlusion" : "closest hit");
-    fprintf(f, "| rays | %" PRIu64 " |\n", r->rays);
+    fprintf(f, "| rays | %" PRIu64 " |\n", c->rays);
     fprintf(f, "| %s | %" PRIu64 " |\n", r->any ? "occluded" : "hits", r->answered);
-    fprintf(f, "| N_IT | %.4f |\n", per_ray(c->isect_tests, r->rays));
-    fprintf(f, "| N_TS | %.4f |\n", per_ray(c->traversal_steps, r->rays));
-    fprintf(f, "| N_ETS | %.4f |\n", per_ray(c->leaves_visited, r->rays));
-    fprintf(f, "| N_EETS | %.4f |\n", per_ray(c->empty_leaves, r->rays));
-    fprintf(f, "| mailbox hits per ray | %.4f |\n", per_ray(c->mailbox_hits, r->rays));
+    fprintf(f, "| N_IT | %.4f |\n", per_ray(c->isect_tests, c->rays));
+    fprintf(f, "| N_TS | %.4f |\n", per_ray(c->traversal_steps, c->rays));
+    fprintf(f, "| N_ETS | %.4f |\n", per_ray(c->leaves_visited, c->rays));
+    fprintf(f, "| N_EETS | %.4f |\n", per_ray(c->empty_leaves, c->rays));
+    fprintf(f, "| mailbox hits per ray | %.4f |\n", per_ray(c->mailbox_hits, c->rays));
     fprintf(f,
             "| N_IN / N_V / N_EV / N_OIV | %" PRIu64 " / %" PRIu64 " / %" PRIu64 " / %" PRIu64
             " |\n",
@@ -233,7 +228,7 @@ static void print_stats(FILE *f, const char *scene, const trace_run *r, const bs
     fprintf(f, "| T_B[s] | %.4f |\n", bsp_accel_build_seconds(r->accel));
     fprintf(f, "| T_TR[s] | %.4f |\n", r->seconds);
     fprintf(f, "| threads | %d |\n", r->threads);
-    fprintf(f, "| Mrays/s | %.3f |\n", r->seconds > 0 ? (double)r->rays / r->seconds * 1e-6 : 0.0);
+    fprintf(f, "| Mrays/s | %.3f |\n", r->seconds > 0 ? (double)c->rays / r->seconds * 1e-6 : 0.0);
 }
 
 static int write_json(const char *path, const char *scene, const trace_run *r,
@@ -249,8 +244,8 @@ static int write_json(const char *path, const char *scene, const trace_run *r,
     json_string(f, scene);
     fprintf(f, ",\n  \"accel\": \"%s\",\n  \"queries\": \"%s\",\n",
             bsp_accel_kind_name(bsp_accel_get_kind(r->accel)), r->any ? "occlusion" : "closest");
-    fprintf(f, "  \"threads\": %d,\n  \"rays\": %" PRIu64 ",\n  \"%s\": %" PRIu64 ",\n",
-            r->threads, r->rays, r->any ? "occluded" : "hits", r->answered);
+    fprintf(f, "  \"threads\": %d,\n  \"rays\": %" PRIu64 ",\n  \"%s\": %" PRIu64 ",\n", r->threads,
+            c->rays, r->any ? "occluded" : "hits", r->answered);
     fprintf(f,
             "  \"isect_tests\": %" PRIu64 ",\n  \"traversal_steps\": %" PRIu64
             ",\n  \"leaves_visited\": %" PRIu64 ",\n  \"empty_leaves\": %" PRIu64
@@ -258,8 +253,8 @@ static int write_json(const char *path, const char *scene, const trace_run *r,
             c->isect_tests, c->traversal_steps, c->leaves_visited, c->empty_leaves,
             c->mailbox_hits);
     fprintf(f, "  \"N_IT\": %.6f,\n  \"N_TS\": %.6f,\n  \"N_ETS\": %.6f,\n  \"N_EETS\": %.6f,\n",
-            per_ray(c->isect_tests, r->rays), per_ray(c->traversal_steps, r->rays),
-            per_ray(c->leaves_visited, r->rays), per_ray(c->empty_leaves, r->rays));
+            per_ray(c->isect_tests, c->rays), per_ray(c->traversal_steps, c->rays),
+            per_ray(c->leaves_visited, c->rays), per_ray(c->empty_leaves, c->rays));
     fprintf(f,
             "  \"N_IN\": %" PRIu64 ",\n  \"N_V\": %" PRIu64 ",\n  \"N_EV\": %" PRIu64
             ",\n  \"N_OIV\": %" PRIu64 ",\n",
@@ -303,8 +298,7 @@ int cmd_trace(int argc, char **argv)
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {
-            printf("usage: %s\n\n%s%s%s", trace_usage, trace_help, build_args_help,
-                   view_args_help);
+            printf("usage: %s\n\n%s%s%s", trace_usage, trace_help, build_args_help, view_args_help);
             return 0;
         } else if (!strcmp(s, "--rays")) {
             rays_path = opt_value(&a, s);

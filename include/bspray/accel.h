@@ -266,6 +266,9 @@ typedef struct bsp_query_counters {
                                  primitive of the closest hit so far */
 } bsp_query_counters;
 
+/* *SUM += *C, field by field (summing the counters of several queries). */
+void bsp_query_counters_add(bsp_query_counters *sum, const bsp_query_counters *c);
+
 /* Per-thread query state for ACCEL (borrowed). NULL when out of memory. */
 bsp_query *bsp_query_create(const bsp_accel *accel);
 void bsp_query_destroy(bsp_query *query);

@@ -182,6 +182,16 @@ const bsp_query_counters *bsp_query_get_counters(const bsp_query *q)
     return &q->counters;
 }
 
+void bsp_query_counters_add(bsp_query_counters *sum, const bsp_query_counters *c)
+{
+    sum->rays += c->rays;
+    sum->isect_tests += c->isect_tests;
+    sum->traversal_steps += c->traversal_steps;
+    sum->leaves_visited += c->leaves_visited;
+    sum->empty_leaves += c->empty_leaves;
+    sum->mailbox_hits += c->mailbox_hits;
+}
+
 void bsp_query_reset_counters(bsp_query *q)
 {
     memset(&q->counters, 0, sizeof q->counters);

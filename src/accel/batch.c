@@ -49,21 +49,11 @@ static void *batch_main(void *arg)
             if (j->hits)
                 (void)bsp_intersect_from(j->accel, w->q, &j->rays[i], from, &j->hits[i]);
             else
-                j->occluded[i] = (unsigned char)bsp_occluded_from(j->accel, w->q, &j->rays[i],
-                                                                  from);
+                j->occluded[i] =
+                    (unsigned char)bsp_occluded_from(j->accel, w->q, &j->rays[i], from);
         }
     }
     return NULL;
-}
-
-static void add_counters(bsp_query_counters *sum, const bsp_query_counters *c)
-{
-    sum->rays += c->rays;
-    sum->isect_tests += c->isect_tests;
-    sum->traversal_steps += c->traversal_steps;
-    sum->leaves_visited += c->leaves_visited;
-    sum->empty_leaves += c->empty_leaves;
-    sum->mailbox_hits += c->mailbox_hits;
 }
 
 /* The number of threads worth starting for N rays when THREADS are asked
@@ -105,8 +95,7 @@ static bsp_status run_batch(batch_job *job, int threads, bsp_query_counters *cou
         }
     bsp_status st = BSP_OK;
     if (nq < threads) {
-        st = error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory for %d ray queries",
-                       threads);
+        st = error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory for %d ray queries", threads);
     } else {
         atomic_init(&job->next, 0);
         int started = 1;
@@ -118,7 +107,7 @@ static bsp_status run_batch(batch_job *job, int threads, bsp_query_counters *cou
             pthread_join(tids[t], NULL);
         if (counters)
             for (int t = 0; t < threads; t++)
-                add_counters(counters, bsp_query_get_counters(w[t].q));
+                bsp_query_counters_add(counters, bsp_query_get_counters(w[t].q));
     }
     for (int t = 0; t < nq; t++)
         bsp_query_destroy(w[t].q);
@@ -128,8 +117,8 @@ static bsp_status run_batch(batch_job *job, int threads, bsp_query_counters *cou
 }
 
 bsp_status bsp_intersect_batch(const bsp_accel *accel, const bsp_ray *rays, const uint32_t *from,
-                               size_t n, int threads, bsp_hit *hits,
-                               bsp_query_counters *counters, bsp_error *err)
+                               size_t n, int threads, bsp_hit *hits, bsp_query_counters *counters,
+                               bsp_error *err)
 {
     batch_job job = {.accel = accel, .rays = rays, .from = from, .n = n, .hits = hits};
     if (!hits && n > 0)
@@ -143,7 +132,6 @@ bsp_status bsp_occluded_batch(const bsp_accel *accel, const bsp_ray *rays, const
 {
     batch_job job = {.accel = accel, .rays = rays, .from = from, .n = n, .occluded = occluded};
     if (!occluded && n > 0)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0,
-                         "no room for the answers of a ray batch");
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no room for the answers of a ray batch");
     return run_batch(&job, threads, counters, err);
 }

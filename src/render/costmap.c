@@ -38,10 +38,14 @@ const char *costmap_measure_name(costmap_measure m)
 uint64_t costmap_value(const bsp_query_counters *c, costmap_measure m)
 {
     switch (m) {
-    case COSTMAP_STEPS: return c->traversal_steps;
-    case COSTMAP_TESTS: return c->isect_tests;
-    case COSTMAP_LEAVES: return c->leaves_visited;
-    default: return c->rays;
+    case COSTMAP_STEPS:
+        return c->traversal_steps;
+    case COSTMAP_TESTS:
+        return c->isect_tests;
+    case COSTMAP_LEAVES:
+        return c->leaves_visited;
+    default:
+        return c->rays;
     }
 }
 
@@ -62,8 +66,7 @@ int costmap_scale(int width, int height)
     return s;
 }
 
-bsp_image *costmap_draw(const bsp_query_counters *costs, int width, int height,
-                        costmap_measure m)
+bsp_image *costmap_draw(const bsp_query_counters *costs, int width, int height, costmap_measure m)
 {
     if (width < 1 || height < 1)
         return NULL;
@@ -82,7 +85,8 @@ bsp_image *costmap_draw(const bsp_query_counters *costs, int width, int height,
     const float white[3] = {1, 1, 1};
     for (int y = 0; y < mh; y++)
         for (int x = 0; x < mw; x++) {
-            uint64_t v = costmap_value(&costs[(size_t)(y / s) * (size_t)width + (size_t)(x / s)], m);
+            uint64_t v =
+                costmap_value(&costs[(size_t)(y / s) * (size_t)width + (size_t)(x / s)], m);
             float rgb[3];
             costmap_color(most ? (double)v / (double)most : 0.0, rgb);
             memcpy(img->rgb + ((size_t)y * (size_t)img->width + (size_t)x) * 3, rgb, sizeof rgb);
