@@ -808,7 +808,10 @@ static void build_logged(const bsp_scene *s, bsp_accel_kind kind, int threads, p
 
 /* The build's progress: reported on the calling thread, within [0, 1],
  * never back for a single tree, ending at 1; many times for an SAH build
- * of many subtrees (on 1 and 3 threads), once for the naive method. */
+ * of many subtrees on one thread, once for the naive method. On 3 threads
+ * the calling thread reports after each subtree it builds itself, and how
+ * many that is depends on the scheduler (on a busy machine the other
+ * threads can take all but one): only the end is certain. */
 TEST(build_progress_is_reported_on_the_calling_thread)
 {
     bsp_scene *s = NULL;
@@ -818,7 +821,7 @@ TEST(build_progress_is_reported_on_the_calling_thread)
     for (int threads = 1; threads <= 3; threads += 2) {
         build_logged(s, BSP_ACCEL_SAH, threads, &l);
         /* the calling thread reports after each subtree it builds itself */
-        CHECK_MSG(l.calls >= (threads == 1 ? 20 : 5) && !l.decreasing && !l.out_of_range &&
+        CHECK_MSG(l.calls >= (threads == 1 ? 20 : 1) && !l.decreasing && !l.out_of_range &&
                       !l.other_thread && l.last == 1.0,
                   "%d threads: %d calls (%d back, %d out of range, %d off-thread), last %g",
                   threads, l.calls, l.decreasing, l.out_of_range, l.other_thread, l.last);
