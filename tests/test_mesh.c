@@ -1405,3 +1405,44 @@ TEST(mesh_default_view_overrides)
     check_corners_visible(s, "sphere", 0);
     bsp_scene_destroy(s);
 }
+
+/* An ASCII float holds every decimal that rounds to a finite float: FLT_MAX
+ * as printed with 9 digits (3.40282347e+38) or as the shortest string that
+ * reads back (3.4028235e+38) lies above FLT_MAX but rounds to it, as a
+ * binary file's float would be; past the midpoint to 2^128 it rounds to
+ * infinity and is refused (found by fuzzing: the first two were refused). */
+TEST(mesh_ply_ascii_float_range_is_what_rounds_to_a_float)
+{
+    static const struct {
+        const char *value;
+        int ok;
+    } cases[] = {
+        {"3.40282347e+38", 1}, {"3.4028235e+38", 1}, {"-3.4028235e+38", 1},
+        {"3.4028236e+38", 0},  {"-3.4028236e+38", 0}, {"1e39", 0},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char path[1024], text[512];
+        snprintf(path, sizeof path, "%s/float_range_%zu.ply", harness_tmpdir(), i);
+        int n = snprintf(text, sizeof text,
+                         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                         "property float y\nproperty float z\nproperty float quality\n"
+                         "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                         "0 0 0 %s\n1 0 0 1\n0 1 0 1\n3 0 1 2\n",
+                         cases[i].value);
+        REQUIRE(write_file(path, text, (size_t)n));
+        bsp_scene *s = NULL;
+        bsp_error err;
+        bsp_status st = bsp_scene_load(path, &s, &err);
+        if (cases[i].ok) {
+            CHECK_MSG(st == BSP_OK, "%s: %s", cases[i].value, err.message);
+            CHECK(s && bsp_scene_prim_count(s) == 1);
+        } else {
+            CHECK_EQ_INT(st, BSP_ERR_PARSE);
+            char want[256];
+            snprintf(want, sizeof want, ":11: '%s' in vertex 0, property 'quality' is out of "
+                     "range of type float", cases[i].value);
+            CHECK_STR_CONTAINS(err.message, want);
+        }
+        bsp_scene_destroy(s);
+    }
+}

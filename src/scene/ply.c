@@ -37,7 +37,6 @@
  * anything is allocated. Degenerate faces are dropped by the builder with one
  * warning. On failure *out is NULL and nothing is kept.
  */
-#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
@@ -51,6 +50,8 @@
 /* Header limits. */
 #define PLY_MAX_ELEMENTS 1024
 #define PLY_MAX_PROPERTIES 8192 /* in all elements */
+/* The least decimal value that rounds to an infinite float: 2^128 - 2^103 */
+#define PLY_FLOAT_ROUNDS_TO_INF 0x1.ffffffp+127
 
 typedef enum ply_type {
     PT_NONE = 0,
@@ -653,7 +654,12 @@ static bsp_status read_value(ply_parser *P, const where *w, ply_type t, int inte
     if (r == MESH_NUM_NONFINITE && must_be_finite)
         return dfail(P, BSP_ERR_INVALID, 0, line, "non-finite number %s in %s",
                      SHOW(s, len, shown), where_str(w, at, sizeof at));
-    if (t == PT_FLOAT32 && isfinite(v) && fabs(v) > FLT_MAX)
+    /* float's range as a decimal reaches it: every value that rounds to a
+     * finite float, up to (not including) 2^128 - 2^103, the midpoint between
+     * FLT_MAX and 2^128 (FLT_MAX printed with 9 digits, 3.40282347e+38, or
+     * as the shortest string that reads back, 3.4028235e+38, lies above
+     * FLT_MAX but rounds to it) */
+    if (t == PT_FLOAT32 && isfinite(v) && fabs(v) >= PLY_FLOAT_ROUNDS_TO_INF)
         return dfail(P, BSP_ERR_PARSE, 0, line, "%s in %s is out of range of type float",
                      SHOW(s, len, shown), where_str(w, at, sizeof at));
     if (must_be_finite && fabs(v) > BSP_SCENE_MAX_COORD)
