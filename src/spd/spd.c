@@ -355,9 +355,14 @@ bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error 
     e->gen(size, &sink);
     if (sink.failed != BSP_OK) {
         bsp_scene_destroy(scene);
-        if (sink.gen_error)
+        if (sink.gen_error) {
             error_set(err, sink.failed, NULL, 0, "spd:%s:%d: %s", e->name, size,
                       sink.gen_error);
+        } else if (err) { /* the scene's own message (e.g. out of memory): name the scene */
+            char msg[BSP_ERROR_MESSAGE_SIZE];
+            snprintf(msg, sizeof msg, "%s", err->message);
+            error_set(err, sink.failed, NULL, 0, "spd:%s:%d: %s", e->name, size, msg);
+        }
         return sink.failed;
     }
     scene_finish(scene);
