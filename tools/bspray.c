@@ -130,11 +130,6 @@ static void on_progress(double done, void *ctx)
     progress_update(((progress_ctx *)ctx)->bar, done);
 }
 
-static double safe_div(double a, double b)
-{
-    return b > 0 ? a / b : 0.0;
-}
-
 static void print_stats_table(FILE *f, const char *scene_name, const char *accel_name,
                               const bsp_render_stats *st, int sampling,
                               const bsp_tree_stats *tree, const bsp_mixed_check *chk)

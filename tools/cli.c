@@ -205,6 +205,11 @@ double now_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+double safe_div(double a, double b)
+{
+    return b > 0 ? a / b : 0.0;
+}
+
 int default_threads(void)
 {
     long n = sysconf(_SC_NPROCESSORS_ONLN);

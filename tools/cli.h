@@ -97,6 +97,8 @@ bsp_scene *load_scene(const char *path);
 bsp_accel *build_accel(const bsp_scene *scene, const bsp_build_options *opts);
 /* Seconds on a monotonic clock. */
 double now_seconds(void);
+/* A / B, or 0 when B is not positive (a per-ray figure of no rays). */
+double safe_div(double a, double b);
 /* The number of cores online (at least 1): the default of every --threads. */
 int default_threads(void);
 /* Writes S to F as a JSON string (quoted; quotes and backslashes escaped,

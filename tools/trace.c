@@ -202,11 +202,6 @@ static int shoot_and_print(trace_run *run, trace_batch *b)
     return 1;
 }
 
-static double per_ray(uint64_t x, uint64_t rays)
-{
-    return rays ? (double)x / (double)rays : 0.0;
-}
-
 static void print_stats(FILE *f, const char *scene, const trace_run *r, const bsp_tree_stats *t)
 {
     const bsp_query_counters *c = &r->counters;
@@ -216,11 +211,12 @@ static void print_stats(FILE *f, const char *scene, const trace_run *r, const bs
     fprintf(f, "| queries | %s |\n", r->any ? "occlusion" : "closest hit");
     fprintf(f, "| rays | %" PRIu64 " |\n", c->rays);
     fprintf(f, "| %s | %" PRIu64 " |\n", r->any ? "occluded" : "hits", r->answered);
-    fprintf(f, "| N_IT | %.4f |\n", per_ray(c->isect_tests, c->rays));
-    fprintf(f, "| N_TS | %.4f |\n", per_ray(c->traversal_steps, c->rays));
-    fprintf(f, "| N_ETS | %.4f |\n", per_ray(c->leaves_visited, c->rays));
-    fprintf(f, "| N_EETS | %.4f |\n", per_ray(c->empty_leaves, c->rays));
-    fprintf(f, "| mailbox hits per ray | %.4f |\n", per_ray(c->mailbox_hits, c->rays));
+    fprintf(f, "| N_IT | %.4f |\n", safe_div((double)c->isect_tests, (double)c->rays));
+    fprintf(f, "| N_TS | %.4f |\n", safe_div((double)c->traversal_steps, (double)c->rays));
+    fprintf(f, "| N_ETS | %.4f |\n", safe_div((double)c->leaves_visited, (double)c->rays));
+    fprintf(f, "| N_EETS | %.4f |\n", safe_div((double)c->empty_leaves, (double)c->rays));
+    fprintf(f, "| mailbox hits per ray | %.4f |\n",
+            safe_div((double)c->mailbox_hits, (double)c->rays));
     fprintf(f,
             "| N_IN / N_V / N_EV / N_OIV | %" PRIu64 " / %" PRIu64 " / %" PRIu64 " / %" PRIu64
             " |\n",
@@ -253,8 +249,10 @@ static int write_json(const char *path, const char *scene, const trace_run *r,
             c->isect_tests, c->traversal_steps, c->leaves_visited, c->empty_leaves,
             c->mailbox_hits);
     fprintf(f, "  \"N_IT\": %.6f,\n  \"N_TS\": %.6f,\n  \"N_ETS\": %.6f,\n  \"N_EETS\": %.6f,\n",
-            per_ray(c->isect_tests, c->rays), per_ray(c->traversal_steps, c->rays),
-            per_ray(c->leaves_visited, c->rays), per_ray(c->empty_leaves, c->rays));
+            safe_div((double)c->isect_tests, (double)c->rays),
+            safe_div((double)c->traversal_steps, (double)c->rays),
+            safe_div((double)c->leaves_visited, (double)c->rays),
+            safe_div((double)c->empty_leaves, (double)c->rays));
     fprintf(f,
             "  \"N_IN\": %" PRIu64 ",\n  \"N_V\": %" PRIu64 ",\n  \"N_EV\": %" PRIu64
             ",\n  \"N_OIV\": %" PRIu64 ",\n",

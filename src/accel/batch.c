@@ -121,8 +121,6 @@ bsp_status bsp_intersect_batch(const bsp_accel *accel, const bsp_ray *rays, cons
                                bsp_error *err)
 {
     batch_job job = {.accel = accel, .rays = rays, .from = from, .n = n, .hits = hits};
-    if (!hits && n > 0)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no room for the hits of a ray batch");
     return run_batch(&job, threads, counters, err);
 }
 
@@ -131,7 +129,5 @@ bsp_status bsp_occluded_batch(const bsp_accel *accel, const bsp_ray *rays, const
                               bsp_query_counters *counters, bsp_error *err)
 {
     batch_job job = {.accel = accel, .rays = rays, .from = from, .n = n, .occluded = occluded};
-    if (!occluded && n > 0)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no room for the answers of a ray batch");
     return run_batch(&job, threads, counters, err);
 }

@@ -265,11 +265,14 @@ static void render_rows(worker *w)
         for (int x = 0; x < width; x++) {
             bsp_ray r = camera_ray(&job->cam, x, y);
             double c[3];
-            const bsp_query_counters before = w->query->counters;
-            trace(w, &r, BSP_NO_PRIM, 0, BSP_RAY_PRIMARY, c);
-            if (costs)
+            if (costs) {
+                const bsp_query_counters before = w->query->counters;
+                trace(w, &r, BSP_NO_PRIM, 0, BSP_RAY_PRIMARY, c);
                 counters_since(&costs[(size_t)y * (size_t)width + (size_t)x],
                                &w->query->counters, &before);
+            } else {
+                trace(w, &r, BSP_NO_PRIM, 0, BSP_RAY_PRIMARY, c);
+            }
             for (int k = 0; k < 3; k++)
                 row[3 * x + k] = (float)c[k];
         }
