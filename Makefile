@@ -1,14 +1,14 @@
 # bspray — plain Makefile. gcc by default; `make CC=clang` must build warning-free too.
 #
-#   make            library (build/libbspray.a) and CLI (build/bspray)
+#   make            libraries (build/libbspray.a, build/libbspray.so) and CLI (build/bspray)
 #   make run        render the built-in default scene, write out/balls.png, print statistics
 #   make test       build and run every test (ends with "N passed, N failed")
 #   make asan-test  the same suite under AddressSanitizer + UndefinedBehaviorSanitizer
 #                   (fewer random rays: BSPRAY_TEST_QUICK=1)
 #   make embree-compare  build/bspray-embree: primary-ray throughput against Intel Embree 3
 #                   on the same rays (needs libembree-dev; docs/embree.md). Not part of `all`.
-#   make install    PREFIX=/usr/local (and DESTDIR for staging): the library, its headers,
-#                   the CLI and a pkg-config file (bspray.pc)
+#   make install    PREFIX=/usr/local (and DESTDIR for staging): both libraries, the
+#                   headers, the CLI and a pkg-config file (bspray.pc)
 #   make clean
 
 CC      ?= gcc
@@ -33,19 +33,41 @@ EMBREE_OBJ := $(BUILD)/obj/tools/embree/compare.o
 # examples/ uses the public headers alone (no -Isrc): what an installed library offers
 EXAMPLE_SRC := $(sort $(wildcard examples/*.c))
 EXAMPLES    := $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%)
+# the same programs linked to the shared library (found beside them by rpath)
+EXAMPLES_SHARED := $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%-shared)
 
 LIB   := $(BUILD)/libbspray.a
+# The shared library: position-independent copies of the library's objects,
+# exporting only the public API (the bsp_* functions of include/bspray/,
+# src/libbspray.map). While the version is 0.x the ABI may change with the
+# minor version, so the soname carries both: libbspray.so.0.1.
+VERSION := $(shell sed -n 's/^\#define BSPRAY_VERSION_STRING "\(.*\)"/\1/p' include/bspray/bspray.h)
+SONAME  := libbspray.so.$(basename $(VERSION))
+SHLIB   := $(BUILD)/libbspray.so.$(VERSION)
+PIC_OBJ := $(LIB_SRC:%.c=$(BUILD)/pic/%.o)
 CLI   := $(BUILD)/bspray
 TESTS := $(BUILD)/bspray_tests
 EMBREE_CLI := $(BUILD)/bspray-embree
 
-.PHONY: all run test asan-test clean embree-compare examples install
-all: $(LIB) $(CLI) $(EXAMPLES)
-examples: $(EXAMPLES)
+.PHONY: all run test asan-test clean embree-compare examples install shared
+all: $(LIB) $(BUILD)/libbspray.so $(CLI) $(EXAMPLES) $(EXAMPLES_SHARED)
+examples: $(EXAMPLES) $(EXAMPLES_SHARED)
+shared: $(BUILD)/libbspray.so
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) -c $< -o $@
+
+$(BUILD)/pic/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -fPIC -c $< -o $@
+
+$(SHLIB): $(PIC_OBJ) src/libbspray.map
+	$(CC) $(ALL_CFLAGS) $(LDFLAGS) -shared -Wl,-soname,$(SONAME) \
+	    -Wl,--version-script=src/libbspray.map -o $@ $(PIC_OBJ) $(LDLIBS)
+
+$(BUILD)/$(SONAME) $(BUILD)/libbspray.so: $(SHLIB)
+	ln -sf $(notdir $(SHLIB)) $@
 
 $(LIB): $(LIB_OBJ)
 	@mkdir -p $(dir $@)
@@ -62,6 +84,11 @@ $(BUILD)/examples/%: examples/%.c $(LIB)
 	@mkdir -p $(dir $@)
 	$(CC) -std=c11 $(WARN) $(OPT) $(SAN) -pthread -Iinclude $(CFLAGS) $(LDFLAGS) -o $@ $< $(LIB) $(LDLIBS)
 
+$(BUILD)/examples/%-shared: examples/%.c $(BUILD)/libbspray.so $(BUILD)/$(SONAME)
+	@mkdir -p $(dir $@)
+	$(CC) -std=c11 $(WARN) $(OPT) $(SAN) -pthread -Iinclude $(CFLAGS) $(LDFLAGS) -o $@ $< \
+	    -L$(BUILD) -Wl,-rpath,'$$ORIGIN/..' -lbspray -lm
+
 embree-compare: $(EMBREE_CLI)
 
 $(EMBREE_CLI): $(EMBREE_OBJ) $(LIB)
@@ -74,7 +101,7 @@ run: $(CLI)
 
 DEFAULT_SCENE ?= spd:balls
 
-test: $(CLI) $(TESTS) $(EXAMPLES)
+test: $(CLI) $(TESTS) $(EXAMPLES) $(EXAMPLES_SHARED)
 	BSPRAY_CLI=./$(CLI) ./$(TESTS)
 
 # The sanitizer run checks the same things with fewer random rays and the
@@ -85,14 +112,17 @@ asan-test:
 
 PREFIX  ?= /usr/local
 DESTDIR ?=
-VERSION := $(shell sed -n 's/^\#define BSPRAY_VERSION_STRING "\(.*\)"/\1/p' include/bspray/bspray.h)
 
-# A static library: the .pc file's Libs carry its dependencies, so a plain
-# `pkg-config --libs bspray` links (with or without --static).
-install: $(LIB) $(CLI)
+# Both libraries: `pkg-config --libs bspray` links the shared one (its own
+# dependencies are recorded in it), `pkg-config --static --libs bspray` adds
+# Libs.private for the static one.
+install: $(LIB) $(SHLIB) $(CLI)
 	install -d $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/include/bspray \
 	    $(DESTDIR)$(PREFIX)/bin
 	install -m 644 $(LIB) $(DESTDIR)$(PREFIX)/lib/
+	install -m 755 $(SHLIB) $(DESTDIR)$(PREFIX)/lib/
+	ln -sf $(notdir $(SHLIB)) $(DESTDIR)$(PREFIX)/lib/$(SONAME)
+	ln -sf $(SONAME) $(DESTDIR)$(PREFIX)/lib/libbspray.so
 	install -m 644 include/bspray/*.h $(DESTDIR)$(PREFIX)/include/bspray/
 	install -m 755 $(CLI) $(DESTDIR)$(PREFIX)/bin/
 	printf '%s\n' 'prefix=$(PREFIX)' 'libdir=$${prefix}/lib' 'includedir=$${prefix}/include' '' \
@@ -100,10 +130,11 @@ install: $(LIB) $(CLI)
 	    'Description: exact ray shooting with adaptive BSP trees (kd-trees)' \
 	    'Version: $(VERSION)' \
 	    'Cflags: -I$${includedir}' \
-	    'Libs: -L$${libdir} -lbspray -lpng -lz -lm -pthread' \
+	    'Libs: -L$${libdir} -lbspray' \
+	    'Libs.private: -lpng -lz -lm -pthread' \
 	    > $(DESTDIR)$(PREFIX)/lib/pkgconfig/bspray.pc
 
 clean:
 	rm -rf build build-asan build-clang out
 
--include $(LIB_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(CLI_OBJ:.o=.d) $(EMBREE_OBJ:.o=.d)
+-include $(PIC_OBJ:.o=.d) $(LIB_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(CLI_OBJ:.o=.d) $(EMBREE_OBJ:.o=.d)

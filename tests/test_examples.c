@@ -1,9 +1,13 @@
 /*
  * test_examples.c — the programs of examples/, built against the public
- * headers alone (Makefile), run and checked against the naive method: the
- * centre ray's primitive and t bit for bit, the shadow answer, and the number
- * of grid rays that hit.
+ * headers alone (Makefile), linked to the static library and (NAME-shared)
+ * to the shared one, run and checked against the naive method: the centre
+ * ray's primitive and t bit for bit, the shadow answer, and the number of
+ * grid rays that hit. And the shared library's exports, against the
+ * functions the public headers declare.
  */
+#include <ctype.h>
+#include <dirent.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -53,10 +57,9 @@ static size_t naive_grid_hits(const bsp_accel *naive, bsp_query *q, bsp_vec3 eye
 /* the side of the grid the test asks for: the naive method shoots it too */
 #define GRID 48
 
-TEST(example_shoot_gives_the_naive_answers)
+/* examples/shoot.c's binary EXE checked against the naive method */
+static void check_shoot(const char *exe)
 {
-    char exe[1024];
-    example_path("shoot", exe, sizeof exe);
     static const char *const scenes[] = {"spd:teapot", "spd:tree"};
     for (size_t sc = 0; sc < 2; sc++) {
         char cmd[2048];
@@ -109,4 +112,162 @@ TEST(example_shoot_gives_the_naive_answers)
     CHECK_EQ_INT(status, 1);
     CHECK_STR_CONTAINS(out, "/nonexistent/x.nff");
     free(out);
+}
+
+TEST(example_shoot_gives_the_naive_answers)
+{
+    char exe[1024];
+    check_shoot(example_path("shoot", exe, sizeof exe));
+}
+
+TEST(example_shoot_linked_to_the_shared_library_gives_the_naive_answers)
+{
+    char exe[1024];
+    check_shoot(example_path("shoot-shared", exe, sizeof exe));
+}
+
+/* --- the shared library's exports ------------------------------------------------------ */
+
+/* A set of names, as one string "\nname1\nname2\n...". */
+typedef struct name_set {
+    char buf[16384];
+    size_t len;
+} name_set;
+
+static int set_has(const name_set *ns, const char *name, size_t n)
+{
+    char key[300];
+    if (n + 3 > sizeof key)
+        return 0;
+    key[0] = '\n';
+    memcpy(key + 1, name, n);
+    key[n + 1] = '\n';
+    key[n + 2] = '\0';
+    return ns->len > 0 && strstr(ns->buf, key) != NULL;
+}
+
+static void set_add(name_set *ns, const char *name, size_t n)
+{
+    if (ns->len == 0)
+        ns->buf[ns->len++] = '\n';
+    if (set_has(ns, name, n) || ns->len + n + 2 > sizeof ns->buf)
+        return;
+    memcpy(ns->buf + ns->len, name, n);
+    ns->len += n;
+    ns->buf[ns->len++] = '\n';
+    ns->buf[ns->len] = '\0';
+}
+
+/* The functions that header text H declares (and does not define static
+ * inline): the names bsp_* followed by '(' outside braces, in a declaration
+ * without "static"; comments and preprocessor lines skipped. */
+static void declared_functions(const char *h, name_set *out)
+{
+    int depth = 0, is_static = 0, line_start = 1;
+    for (const char *p = h; *p;) {
+        if (p[0] == '/' && p[1] == '*') {
+            const char *e = strstr(p + 2, "*/");
+            p = e ? e + 2 : p + strlen(p);
+            continue;
+        }
+        if (p[0] == '/' && p[1] == '/') {
+            p += strcspn(p, "\n");
+            continue;
+        }
+        if (line_start && *p == '#') { /* a directive, with its continuation lines */
+            while (*p && !(*p == '\n' && p[-1] != '\\'))
+                p++;
+            continue;
+        }
+        line_start = *p == '\n' || (line_start && isspace((unsigned char)*p));
+        if (*p == '{')
+            depth++;
+        else if (*p == '}') {
+            depth--;
+            if (depth == 0)
+                is_static = 0;
+        } else if (*p == ';' && depth == 0)
+            is_static = 0;
+        if (isalpha((unsigned char)*p) || *p == '_') {
+            const char *w = p;
+            while (isalnum((unsigned char)*p) || *p == '_')
+                p++;
+            size_t n = (size_t)(p - w);
+            if (w > h && (isalnum((unsigned char)w[-1]) || w[-1] == '_'))
+                continue;
+            if (n == 6 && strncmp(w, "static", 6) == 0)
+                is_static = 1;
+            const char *q = p;
+            while (*q == ' ' || *q == '\t' || *q == '\n')
+                q++;
+            if (depth == 0 && !is_static && *q == '(' && n > 4 && strncmp(w, "bsp_", 4) == 0)
+                set_add(out, w, n);
+            continue;
+        }
+        p++;
+    }
+}
+
+TEST(shared_library_exports_exactly_the_public_api)
+{
+    const char *cli = harness_cli();
+    const char *slash = strrchr(cli, '/');
+    char lib[1024], cmd[1200];
+    snprintf(lib, sizeof lib, "%.*s%slibbspray.so", slash ? (int)(slash - cli) : 0, cli,
+             slash ? "/" : "");
+    DIR *d = opendir("include/bspray");
+    if (!d)
+        harness_skip("include/bspray not found from the working directory");
+    name_set declared = {.len = 0}, exported = {.len = 0};
+    struct dirent *de;
+    size_t headers = 0;
+    while ((de = readdir(d)) != NULL) {
+        size_t n = strlen(de->d_name);
+        if (n < 3 || strcmp(de->d_name + n - 2, ".h") != 0)
+            continue;
+        char path[512];
+        snprintf(path, sizeof path, "include/bspray/%s", de->d_name);
+        FILE *f = fopen(path, "rb");
+        REQUIRE(f);
+        static char text[1 << 18];
+        size_t got = fread(text, 1, sizeof text - 1, f);
+        fclose(f);
+        text[got] = '\0';
+        declared_functions(text, &declared);
+        headers++;
+    }
+    closedir(d);
+    snprintf(cmd, sizeof cmd, "nm -D --defined-only '%s' 2>/dev/null", lib);
+    int status;
+    char *out = harness_run(cmd, &status);
+    REQUIRE(out);
+    if (status != 0 || !*out) {
+        free(out);
+        harness_skip("nm -D could not read %s (binutils missing?)", lib);
+    }
+    size_t nexp = 0;
+    for (char *line = strtok(out, "\n"); line; line = strtok(NULL, "\n")) {
+        char addr[64], type[8], name[256];
+        if (sscanf(line, "%63s %7s %255s", addr, type, name) == 3) {
+            set_add(&exported, name, strlen(name));
+            nexp++;
+        }
+    }
+    free(out);
+    /* every export is declared, every declared function exported */
+    size_t ndecl = 0;
+    for (const char *p = exported.buf + 1; *p; p += strcspn(p, "\n") + 1) {
+        size_t n = strcspn(p, "\n");
+        CHECK_MSG(set_has(&declared, p, n), "%s exports %.*s, which no public header declares",
+                  lib, (int)n, p);
+    }
+    for (const char *p = declared.buf + 1; *p; p += strcspn(p, "\n") + 1) {
+        size_t n = strcspn(p, "\n");
+        ndecl++;
+        CHECK_MSG(set_has(&exported, p, n), "%.*s is declared in include/bspray/ but %s does "
+                  "not export it", (int)n, p, lib);
+    }
+    CHECK_MSG(headers >= 5 && ndecl >= 50, "%zu headers, %zu functions: parsed too few", headers,
+              ndecl);
+    CHECK_MSG(nexp == ndecl, "%zu exported, %zu declared", nexp, ndecl);
 }
