@@ -63,4 +63,34 @@ static inline void kd_test_each_tree(const char *const *specs, size_t nspecs, kd
     }
 }
 
+/* N rays around box B from the generator *RNG: random origins and
+ * directions, a share of them axis-aligned or with a zero component, every
+ * fifth leaving a primitive out (FROM; NPRIMS primitives), every third with
+ * a finite interval. */
+static inline void kd_test_rays(unsigned long long *rng, bsp_box b, size_t n, size_t nprims,
+                                bsp_ray *rays, uint32_t *from)
+{
+    for (size_t i = 0; i < n; i++) {
+        double o[3], d[3];
+        for (int k = 0; k < 3; k++) {
+            double lo = b.lo.v[k], hi = b.hi.v[k], w = hi - lo;
+            o[k] = lo - 0.2 * w + 1.4 * w * harness_rnd(rng);
+            d[k] = 2.0 * harness_rnd(rng) - 1.0;
+        }
+        if (i % 7 == 0)
+            d[(i / 7) % 3] = 0.0;
+        if (i % 11 == 0) {
+            int axis = (int)((i / 11) % 3);
+            for (int k = 0; k < 3; k++)
+                d[k] = k == axis ? (i % 2 ? 1.0 : -1.0) : 0.0;
+        }
+        if (d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0)
+            d[2] = 1.0;
+        rays[i] = (bsp_ray){bsp_v3(o[0], o[1], o[2]), bsp_v3(d[0], d[1], d[2]), 0.0, INFINITY};
+        if (i % 3 == 0)
+            rays[i].tmax = harness_rnd(rng) * 2.0;
+        from[i] = i % 5 == 0 ? (uint32_t)(harness_rnd(rng) * (double)nprims) : BSP_NO_PRIM;
+    }
+}
+
 #endif /* BSPRAY_TESTS_KD_TEST_UTIL_H */

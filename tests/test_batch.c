@@ -17,38 +17,6 @@
 #include "kd_test_util.h"
 
 static unsigned long long rng_state;
-static double rnd(void)
-{
-    return harness_rnd(&rng_state);
-}
-
-/* N rays around box B: random origins and directions, a share of them
- * axis-aligned or with a zero component, every fifth leaving a primitive out
- * (FROM), others with a finite interval. */
-static void make_rays(bsp_box b, size_t n, size_t nprims, bsp_ray *rays, uint32_t *from)
-{
-    for (size_t i = 0; i < n; i++) {
-        double o[3], d[3];
-        for (int k = 0; k < 3; k++) {
-            double lo = b.lo.v[k], hi = b.hi.v[k], w = hi - lo;
-            o[k] = lo - 0.2 * w + 1.4 * w * rnd();
-            d[k] = 2.0 * rnd() - 1.0;
-        }
-        if (i % 7 == 0)
-            d[(i / 7) % 3] = 0.0;
-        if (i % 11 == 0) {
-            int axis = (int)((i / 11) % 3);
-            for (int k = 0; k < 3; k++)
-                d[k] = k == axis ? (i % 2 ? 1.0 : -1.0) : 0.0;
-        }
-        if (d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0)
-            d[2] = 1.0;
-        rays[i] = (bsp_ray){bsp_v3(o[0], o[1], o[2]), bsp_v3(d[0], d[1], d[2]), 0.0, INFINITY};
-        if (i % 3 == 0)
-            rays[i].tmax = rnd() * 2.0;
-        from[i] = i % 5 == 0 ? (uint32_t)(rnd() * (double)nprims) : BSP_NO_PRIM;
-    }
-}
 
 static void add(bsp_query_counters *s, const bsp_query_counters *c)
 {
@@ -80,7 +48,7 @@ TEST(batch_matches_single_naive_queries_on_any_thread_count)
         bsp_scene *s = kd_test_load(scenes[sc]);
         bsp_error err;
         rng_state = 0x5EED0000ULL + sc;
-        make_rays(bsp_scene_bounds(s), N, bsp_scene_prim_count(s), rays, from);
+        kd_test_rays(&rng_state, bsp_scene_bounds(s), N, bsp_scene_prim_count(s), rays, from);
         /* the reference: one naive query per ray, in a plain loop */
         bsp_accel *naive = kd_test_build(s, BSP_ACCEL_NAIVE);
         bsp_query *nq = bsp_query_create(naive);
@@ -221,7 +189,7 @@ TEST(cli_trace_threads_exact_and_stats)
     uint32_t *from = malloc(N * sizeof *from);
     REQUIRE(rays && from);
     rng_state = 0xC0FFEEULL;
-    make_rays(bsp_scene_bounds(s), N, np, rays, from);
+    kd_test_rays(&rng_state, bsp_scene_bounds(s), N, np, rays, from);
     for (size_t i = 0; i < N; i++) { /* the file gives no interval: [0, inf) */
         rays[i].tmin = 0.0;
         rays[i].tmax = INFINITY;

@@ -101,7 +101,7 @@ static int cmp_double(const void *x, const void *y)
 
 int cmd_ab(int argc, char **argv)
 {
-    args a = {argc, 1, argv, ab_usage};
+    args a = {argc, 1, argv, ab_usage, NULL};
     const char *scene_path = NULL;
     int res = 513, depth = 4, all = 0, rounds = 5, slice = 2048;
     int b_origin = 1, a_options = 0, b_options = 0; /* B leaves origins out; options given */

@@ -572,7 +572,7 @@ int cmd_bench(int argc, char **argv)
             return bench_paper(argc, argv);
         else if (!strcmp(argv[i], "--scaling"))
             return bench_scaling(argc, argv);
-    args a = {argc, 1, argv, bench_usage};
+    args a = {argc, 1, argv, bench_usage, NULL};
     bench_opts o;
     memset(&o, 0, sizeof o);
     o.res = 513;

@@ -406,7 +406,7 @@ static int scene_looks_loadable(const char *scene)
 
 int bench_scaling(int argc, char **argv)
 {
-    args a = {argc, 1, argv, scaling_usage};
+    args a = {argc, 1, argv, scaling_usage, NULL};
     scaling_opts o;
     memset(&o, 0, sizeof o);
     o.kinds[o.nkinds++] = BSP_ACCEL_SAH;

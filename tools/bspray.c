@@ -34,7 +34,7 @@ static const char render_usage[] =
     "                    [--threads N] [--stats-json FILE] [--save-rays PREFIX] [--quiet]\n"
     "                    [--cost-map FILE.png [--cost-measure steps|tests|leaves|rays]]\n"
     "                    [--eye X,Y,Z] [--at X,Y,Z | --dir X,Y,Z] [--up X,Y,Z] [--fov DEG]\n"
-    "                    [--ortho W|auto]";
+    "                    [--ortho W|auto] [--tree FILE]";
 
 static const char render_help[] =
     "Render SCENE with the Whitted ray tracer of the SPD and print its ray statistics.\n"
@@ -262,9 +262,9 @@ static int write_stats_json(const char *path, const char *scene_name, const char
 
 static int cmd_render(int argc, char **argv)
 {
-    args a = {argc, 1, argv, render_usage};
+    args a = {argc, 1, argv, render_usage, NULL};
     const char *scene_path = NULL, *out_path = "out.png", *json_path = NULL, *rays_prefix = NULL;
-    const char *cost_path = NULL;
+    const char *cost_path = NULL, *tree_path = NULL;
     costmap_measure cost_measure = COSTMAP_STEPS;
     int quiet = 0;
     view_args view = {0};
@@ -275,8 +275,8 @@ static int cmd_render(int argc, char **argv)
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {
-            printf("usage: %s\n\n%s%s%s", render_usage, render_help, build_args_help,
-                   view_args_help);
+            printf("usage: %s\n\n%s%s%s%s", render_usage, render_help, build_args_help,
+                   tree_arg_help, view_args_help);
             return 0;
         } else if (!strcmp(s, "-o") || !strcmp(s, "--output")) {
             out_path = opt_value(&a, s);
@@ -308,6 +308,8 @@ static int cmd_render(int argc, char **argv)
             continue;
         } else if (!strcmp(s, "--stats-json")) {
             json_path = opt_value(&a, s);
+        } else if (!strcmp(s, "--tree")) {
+            tree_path = opt_value(&a, s);
         } else if (!strcmp(s, "--save-rays")) {
             rays_prefix = opt_value(&a, s);
         } else if (!strcmp(s, "--cost-map")) {
@@ -363,7 +365,7 @@ static int cmd_render(int argc, char **argv)
         ropts.ray_log_ctx = &rf;
         ropts.threads = 1; /* the rays in the order they are cast */
     }
-    bsp_accel *accel = build_accel(scene, &bopts);
+    bsp_accel *accel = tree_or_build(&a, scene, &bopts, tree_path);
     progress_ctx pc = {progress_create(stderr, "render")};
     ropts.progress = on_progress;
     ropts.progress_ctx = &pc;
@@ -383,7 +385,7 @@ static int cmd_render(int argc, char **argv)
             fprintf(stderr, "%s: %s\n", prog, err.message);
             rc = EXIT_INPUT;
         }
-        const char *an = bsp_accel_kind_name(bopts.kind);
+        const char *an = bsp_accel_kind_name(bsp_accel_get_kind(accel));
         bsp_tree_stats tree;
         bsp_accel_tree_stats(accel, &tree);
         bsp_mixed_check chk;
@@ -416,22 +418,23 @@ static int cmd_render(int argc, char **argv)
 /* --- stats --------------------------------------------------------------------------- */
 
 static const char stats_usage[] =
-    "bspray stats SCENE [--accel METHOD] [--max-depth N] [--leaf-size N] [--check]\n"
-    "                   [--eye X,Y,Z] [--at X,Y,Z | --dir X,Y,Z] [--up X,Y,Z] [--fov DEG]\n"
-    "                   [--ortho W|auto]";
+    "bspray stats SCENE [--accel METHOD] [--max-depth N] [--leaf-size N] [--tree FILE]\n"
+    "                   [--check] [--eye X,Y,Z] [--at X,Y,Z | --dir X,Y,Z] [--up X,Y,Z]\n"
+    "                   [--fov DEG] [--ortho W|auto]";
 static const char stats_help[] =
     "Print what SCENE contains: primitives by kind (with polygon vertex counts), bounds,\n"
     "camera, lights, materials, background, and load warnings. With --accel, also build\n"
     "that structure and print its figures with Havran's names (N_IN interior nodes, N_V\n"
     "leaves, N_EV empty leaves, N_OIV references in leaves, leaf depths, bytes, the expected\n"
-    "SAH cost with unit costs and under the build's own costs, build time T_B).\n"
+    "SAH cost with unit costs and under the build's own costs, build time T_B). With\n"
+    "--tree, the same figures of a saved tree (bspray build), and its load time.\n"
     "\n"
     "  --check            run the tree invariant checker too\n";
 
 static int cmd_stats(int argc, char **argv)
 {
-    args a = {argc, 1, argv, stats_usage};
-    const char *scene_path = NULL;
+    args a = {argc, 1, argv, stats_usage, NULL};
+    const char *scene_path = NULL, *tree_path = NULL;
     int want_tree = 0, check = 0;
     view_args view = {0};
     bsp_build_options bopts;
@@ -439,8 +442,8 @@ static int cmd_stats(int argc, char **argv)
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {
-            printf("usage: %s\n\n%s%s%s", stats_usage, stats_help, build_args_help,
-                   view_args_help);
+            printf("usage: %s\n\n%s%s%s%s", stats_usage, stats_help, build_args_help,
+                   tree_arg_help, view_args_help);
             return 0;
         } else if (parse_build_arg(&a, &bopts)) {
             want_tree = 1;
@@ -448,6 +451,9 @@ static int cmd_stats(int argc, char **argv)
             continue;
         } else if (!strcmp(s, "--check")) {
             check = 1;
+        } else if (!strcmp(s, "--tree")) {
+            tree_path = opt_value(&a, s);
+            want_tree = 1;
         } else {
             take_operand(&a, &scene_path);
         }
@@ -524,11 +530,16 @@ static int cmd_stats(int argc, char **argv)
     printf("background: %g %g %g\n", bg[0], bg[1], bg[2]);
     int rc = 0;
     if (want_tree) {
-        bsp_accel *accel = build_accel(scene, &bopts);
+        bsp_accel *accel = tree_or_build(&a, scene, &bopts, tree_path);
         bsp_tree_stats t;
         bsp_accel_tree_stats(accel, &t);
-        printf("structure: %s\n", bsp_accel_kind_name(bopts.kind));
-        printf("  T_B[s]         %.4f\n", bsp_accel_build_seconds(accel));
+        bsp_accel_kind kind = bsp_accel_get_kind(accel);
+        printf("structure: %s%s%s\n", bsp_accel_kind_name(kind), tree_path ? ", loaded from " : "",
+               tree_path ? tree_path : "");
+        if (tree_path)
+            printf("  load[s]        %.4f\n", bsp_accel_build_seconds(accel));
+        else
+            printf("  T_B[s]         %.4f\n", bsp_accel_build_seconds(accel));
         printf("  N_IN           %" PRIu64 "\n", t.interior_nodes);
         printf("  N_V            %" PRIu64 "\n", t.leaves);
         printf("  N_EV           %" PRIu64 "\n", t.empty_leaves);
@@ -545,7 +556,7 @@ static int cmd_stats(int argc, char **argv)
         printf("  model cost     %.3f (SAH under the build's costs, in traversal steps; no\n"
                "                 mailbox term)\n",
                t.model_cost);
-        if (bopts.kind != BSP_ACCEL_NAIVE)
+        if (kind != BSP_ACCEL_NAIVE)
             printf("  digest         %016" PRIx64 " (nodes and leaf lists hashed: equal digests,\n"
                "                 the same tree bit for bit)\n",
                t.digest);
@@ -600,7 +611,7 @@ static void print_gen_help(void)
 
 static int cmd_gen(int argc, char **argv)
 {
-    args a = {argc, 1, argv, gen_usage};
+    args a = {argc, 1, argv, gen_usage, NULL};
     const char *name = NULL, *out_path = NULL;
     int size = 0, tessellate = 0;
     for (; a.i < argc; a.i++) {
@@ -697,7 +708,9 @@ static void print_main_help(FILE *f)
             "commands:\n"
             "  render   Whitted ray tracing of a scene to PNG/PPM, with ray statistics\n"
             "  trace    batch ray queries (closest hit or occlusion) from a ray file\n"
-            "  stats    what a scene contains\n"
+            "  stats    what a scene contains (and a structure's figures)\n"
+            "  build    build a scene's kd-tree once and save it (render, trace and stats\n"
+            "           load it with --tree FILE)\n"
             "  bench    build, validate and time acceleration methods (Markdown + CSV)\n"
             "  gen      write a built-in SPD scene as NFF\n"
             "  calibrate  measure the SAH's per-primitive intersection costs on this machine\n"
@@ -731,6 +744,8 @@ int main(int argc, char **argv)
         return cmd_trace(argc - 1, argv + 1);
     if (!strcmp(cmd, "stats"))
         return cmd_stats(argc - 1, argv + 1);
+    if (!strcmp(cmd, "build"))
+        return cmd_build(argc - 1, argv + 1);
     if (!strcmp(cmd, "gen"))
         return cmd_gen(argc - 1, argv + 1);
     if (!strcmp(cmd, "bench"))

@@ -442,7 +442,32 @@ int parse_build_arg(args *a, bsp_build_options *opts)
     } else {
         return 0;
     }
+    if (!a->build_opt)
+        a->build_opt = s;
     return 1;
+}
+
+const char tree_arg_help[] =
+    "  --tree FILE        use the kd-tree saved in FILE (bspray build) instead of building\n"
+    "                     one: built for this very scene (its primitives are checked),\n"
+    "                     with the method and options it was built with\n";
+
+bsp_accel *tree_or_build(const args *a, const bsp_scene *scene, const bsp_build_options *opts,
+                         const char *tree_path)
+{
+    if (!tree_path)
+        return build_accel(scene, opts);
+    if (a->build_opt)
+        die_usage(a->usage,
+                  "option '--tree' uses a saved tree, built with its own options: drop '%s'",
+                  a->build_opt);
+    bsp_accel *accel = NULL;
+    bsp_error err;
+    if (bsp_accel_load(scene, tree_path, &accel, &err) != BSP_OK) {
+        fprintf(stderr, "%s: %s\n", prog, err.message);
+        exit(EXIT_INPUT);
+    }
+    return accel;
 }
 
 const char view_args_help[] =

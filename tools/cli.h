@@ -19,6 +19,7 @@ typedef struct args {
     int argc, i;
     char **argv;
     const char *usage;
+    const char *build_opt; /* the first build option parse_build_arg took, or NULL */
 } args;
 
 /* Prints "bspray: " FMT (with ARG), the usage line and a hint; exits 2. */
@@ -95,6 +96,13 @@ void apply_view_args(bsp_scene *scene, const char *path, const view_args *v,
 bsp_scene *load_scene(const char *path);
 /* Builds or exits 1 with the message. */
 bsp_accel *build_accel(const bsp_scene *scene, const bsp_build_options *opts);
+/* The help line of --tree, and the structure a command works on: the tree
+ * saved in TREE_PATH (bspray build) when it is not NULL — a usage error when
+ * build options were given too (A->build_opt), a message and exit 1 when it
+ * cannot be loaded — else a build under OPTS (build_accel). */
+extern const char tree_arg_help[];
+bsp_accel *tree_or_build(const args *a, const bsp_scene *scene, const bsp_build_options *opts,
+                         const char *tree_path);
 /* Seconds on a monotonic clock. */
 double now_seconds(void);
 /* A / B, or 0 when B is not positive (a per-ray figure of no rays). */
@@ -110,5 +118,6 @@ int cmd_bench(int argc, char **argv);
 int cmd_viz(int argc, char **argv);
 int cmd_ab(int argc, char **argv);
 int cmd_trace(int argc, char **argv);
+int cmd_build(int argc, char **argv);
 
 #endif /* BSPRAY_TOOLS_CLI_H */

@@ -522,7 +522,7 @@ static int write_plot(const char *path, const table *t)
 
 int bench_paper(int argc, char **argv)
 {
-    args a = {argc, 1, argv, paper_usage};
+    args a = {argc, 1, argv, paper_usage, NULL};
     paper_opts o;
     memset(&o, 0, sizeof o);
     o.res = 513;

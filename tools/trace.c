@@ -28,7 +28,8 @@
 
 static const char trace_usage[] =
     "bspray trace SCENE --rays FILE [--any] [--threads N] [--exact] [--stats]\n"
-    "                   [--stats-json FILE] [--accel METHOD] [--mailbox on|off] [build options]";
+    "                   [--stats-json FILE] [--accel METHOD] [--mailbox on|off] [build options]\n"
+    "                   [--tree FILE]";
 
 static const char trace_help[] =
     "Shoot the rays of FILE ('-' for standard input) into SCENE, one query per line.\n"
@@ -286,8 +287,8 @@ static void free_batch(trace_batch *b)
 
 int cmd_trace(int argc, char **argv)
 {
-    args a = {argc, 1, argv, trace_usage};
-    const char *scene_path = NULL, *rays_path = NULL, *json_path = NULL;
+    args a = {argc, 1, argv, trace_usage, NULL};
+    const char *scene_path = NULL, *rays_path = NULL, *json_path = NULL, *tree_path = NULL;
     trace_run run = {0};
     int stats = 0;
     bsp_build_options bopts;
@@ -296,7 +297,8 @@ int cmd_trace(int argc, char **argv)
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {
-            printf("usage: %s\n\n%s%s%s", trace_usage, trace_help, build_args_help, view_args_help);
+            printf("usage: %s\n\n%s%s%s%s", trace_usage, trace_help, build_args_help, tree_arg_help,
+                   view_args_help);
             return 0;
         } else if (!strcmp(s, "--rays")) {
             rays_path = opt_value(&a, s);
@@ -310,6 +312,8 @@ int cmd_trace(int argc, char **argv)
             json_path = opt_value(&a, s);
         } else if (!strcmp(s, "--threads")) {
             run.threads = parse_int(&a, s, 1, 256);
+        } else if (!strcmp(s, "--tree")) {
+            tree_path = opt_value(&a, s);
         } else if (parse_build_arg(&a, &bopts) || parse_view_arg(&a, &view)) {
             continue;
         } else {
@@ -333,7 +337,7 @@ int cmd_trace(int argc, char **argv)
     run.in = in;
     bsp_scene *scene = load_scene(scene_path);
     apply_view_args(scene, scene_path, &view, &bopts, NULL);
-    bsp_accel *accel = build_accel(scene, &bopts);
+    bsp_accel *accel = tree_or_build(&a, scene, &bopts, tree_path);
     run.accel = accel;
     if (run.threads == 0)
         run.threads = default_threads();

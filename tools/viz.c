@@ -137,7 +137,7 @@ static bsp_box zoom_region(bsp_box root, bsp_vec3 at, double zoom)
 
 int cmd_viz(int argc, char **argv)
 {
-    args a = {argc, 1, argv, viz_usage};
+    args a = {argc, 1, argv, viz_usage, NULL};
     const char *scene_path = NULL, *out_path = NULL, *list = "sah";
     int max_depth = 10, leaf_size = 0, size = 512, threads = 0, quiet = 0;
     double zoom = 1.0;

@@ -194,8 +194,32 @@ bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts
 void bsp_accel_destroy(bsp_accel *accel);
 const bsp_scene *bsp_accel_scene(const bsp_accel *accel);
 bsp_accel_kind bsp_accel_get_kind(const bsp_accel *accel);
-/* Seconds spent in bsp_accel_build. */
+/* Seconds spent in bsp_accel_build (for a loaded tree: in bsp_accel_load). */
 double bsp_accel_build_seconds(const bsp_accel *accel);
+
+/* A built kd-tree as a file, so that a large scene's tree is built once and
+ * loaded in later runs (docs/formats.md, "kd-tree files"): its nodes and leaf
+ * lists, the options that shaped it (method, limits, resolved cost model,
+ * mailboxes) and a fingerprint of the scene's primitives, checksummed.
+ * Writes PATH whole or not at all (through a temporary file beside it).
+ * BSP_ERR_INVALID for the naive method (no structure), BSP_ERR_IO when PATH
+ * cannot be written. */
+bsp_status bsp_accel_save(const bsp_accel *accel, const char *path, bsp_error *err);
+/* Loads a tree that bsp_accel_save wrote over SCENE (borrowed; must outlive
+ * it), which must have the very primitives it was built over (checked by
+ * their count and fingerprint). The file is checked whole before it is used:
+ * size, checksum, every node's indices and leaf range, every reference a
+ * live primitive of SCENE, each node reached once, depths within the limit,
+ * planes inside their cells. So no file can make a query crash or loop; that
+ * every leaf lists the primitives it must is what bsp_accel_check verifies,
+ * which costs about a build (a file bsp_accel_save wrote passes it).
+ * Errors name PATH: BSP_ERR_IO (cannot read), BSP_ERR_PARSE (not a tree file,
+ * another format version, damaged), BSP_ERR_INVALID (another scene),
+ * BSP_ERR_NOMEM. The options of the result (bsp_accel_get_kind, the cost
+ * model of bsp_accel_tree_stats) are the saved ones; bsp_accel_mixed_check
+ * gives zeros. */
+bsp_status bsp_accel_load(const bsp_scene *scene, const char *path, bsp_accel **out,
+                          bsp_error *err);
 
 /* Figures of a built tree, with Havran's names (all 0 for the naive method). */
 typedef struct bsp_tree_stats {

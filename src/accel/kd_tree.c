@@ -553,6 +553,11 @@ bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
         kd_destroy(t);
         return st;
     }
+    return kd_accel_adopt(a, t, err);
+}
+
+bsp_status kd_accel_adopt(bsp_accel *a, kd_tree *t, bsp_error *err)
+{
     t->box_empty = box_is_empty(t->box);
     if (!kd_trace_build(t, a->scene)) {
         kd_destroy(t);

@@ -182,6 +182,10 @@ HIDDEN void kd_sah_default_limits(bsp_build_options *o, const bsp_scene *scene);
 /* --- used by the accel front end --------------------------------------------- */
 
 HIDDEN bsp_status kd_accel_build(bsp_accel *a, bsp_error *err);
+/* Makes the built (or loaded) tree T the structure of A: its traversal
+ * copies made, A's queries pointed at it; A owns T from then on, also when
+ * this fails (out of memory: T is freed). */
+HIDDEN bsp_status kd_accel_adopt(bsp_accel *a, kd_tree *t, bsp_error *err);
 HIDDEN int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
                         bsp_hit *hit);
 HIDDEN int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from);
