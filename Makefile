@@ -1,6 +1,7 @@
 # bspray — plain Makefile. gcc by default; `make CC=clang` must build warning-free too.
 #
-#   make            libraries (build/libbspray.a, build/libbspray.so) and CLI (build/bspray)
+#   make            libraries (build/public/libbspray.a and build/libbspray.so for users,
+#                   build/libbspray.a with the internal names for the CLI and tests), CLI
 #   make run        render the built-in default scene, write out/balls.png, print statistics
 #   make test       build and run every test (ends with "N passed, N failed")
 #   make asan-test  the same suite under AddressSanitizer + UndefinedBehaviorSanitizer
@@ -45,12 +46,18 @@ VERSION := $(shell sed -n 's/^\#define BSPRAY_VERSION_STRING "\(.*\)"/\1/p' incl
 SONAME  := libbspray.so.$(basename $(VERSION))
 SHLIB   := $(BUILD)/libbspray.so.$(VERSION)
 PIC_OBJ := $(LIB_SRC:%.c=$(BUILD)/pic/%.o)
+# The static library users get (make install, examples/): the library's objects
+# linked into one, every symbol but the public API's made local, so that a
+# program with a function named like an internal one (error_set, draw_line, ...)
+# still links. The CLI and the tests link $(LIB), which keeps the internal names.
+PUBLIC_LIB := $(BUILD)/public/libbspray.a
+OBJCOPY ?= objcopy
 CLI   := $(BUILD)/bspray
 TESTS := $(BUILD)/bspray_tests
 EMBREE_CLI := $(BUILD)/bspray-embree
 
 .PHONY: all run test asan-test clean embree-compare examples install shared
-all: $(LIB) $(BUILD)/libbspray.so $(CLI) $(EXAMPLES) $(EXAMPLES_SHARED)
+all: $(LIB) $(PUBLIC_LIB) $(BUILD)/libbspray.so $(CLI) $(EXAMPLES) $(EXAMPLES_SHARED)
 examples: $(EXAMPLES) $(EXAMPLES_SHARED)
 shared: $(BUILD)/libbspray.so
 
@@ -69,6 +76,16 @@ $(SHLIB): $(PIC_OBJ) src/libbspray.map
 $(BUILD)/$(SONAME) $(BUILD)/libbspray.so: $(SHLIB)
 	ln -sf $(notdir $(SHLIB)) $@
 
+$(BUILD)/public/libbspray.o: $(LIB_OBJ)
+	@mkdir -p $(dir $@)
+	$(CC) -r -nostdlib -o $@.all $(LIB_OBJ)
+	$(OBJCOPY) --wildcard --keep-global-symbol='bsp_*' $@.all $@
+	rm -f $@.all
+
+$(PUBLIC_LIB): $(BUILD)/public/libbspray.o
+	rm -f $@
+	ar rcs $@ $<
+
 $(LIB): $(LIB_OBJ)
 	@mkdir -p $(dir $@)
 	rm -f $@
@@ -80,9 +97,15 @@ $(CLI): $(CLI_OBJ) $(LIB)
 $(TESTS): $(TEST_OBJ) $(LIB)
 	$(CC) $(ALL_CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
-$(BUILD)/examples/%: examples/%.c $(LIB)
+$(BUILD)/examples/%: examples/%.c $(PUBLIC_LIB)
 	@mkdir -p $(dir $@)
-	$(CC) -std=c11 $(WARN) $(OPT) $(SAN) -pthread -Iinclude $(CFLAGS) $(LDFLAGS) -o $@ $< $(LIB) $(LDLIBS)
+	$(CC) -std=c11 $(WARN) $(OPT) $(SAN) -pthread -Iinclude $(CFLAGS) $(LDFLAGS) -o $@ $< $(PUBLIC_LIB) $(LDLIBS)
+
+# A program that defines functions and data named like the library's internal
+# ones, linked to the public static library: it links only if they are hidden.
+$(BUILD)/tests/names_apart: tests/link/names_apart.c $(PUBLIC_LIB)
+	@mkdir -p $(dir $@)
+	$(CC) -std=c11 $(WARN) $(OPT) $(SAN) -pthread -Iinclude $(CFLAGS) $(LDFLAGS) -o $@ $< $(PUBLIC_LIB) $(LDLIBS)
 
 $(BUILD)/examples/%-shared: examples/%.c $(BUILD)/libbspray.so $(BUILD)/$(SONAME)
 	@mkdir -p $(dir $@)
@@ -101,7 +124,7 @@ run: $(CLI)
 
 DEFAULT_SCENE ?= spd:balls
 
-test: $(CLI) $(TESTS) $(EXAMPLES) $(EXAMPLES_SHARED)
+test: $(CLI) $(TESTS) $(EXAMPLES) $(EXAMPLES_SHARED) $(BUILD)/tests/names_apart
 	BSPRAY_CLI=./$(CLI) ./$(TESTS)
 
 # The sanitizer run checks the same things with fewer random rays and the
@@ -116,10 +139,10 @@ DESTDIR ?=
 # Both libraries: `pkg-config --libs bspray` links the shared one (its own
 # dependencies are recorded in it), `pkg-config --static --libs bspray` adds
 # Libs.private for the static one.
-install: $(LIB) $(SHLIB) $(CLI)
+install: $(PUBLIC_LIB) $(SHLIB) $(CLI)
 	install -d $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/include/bspray \
 	    $(DESTDIR)$(PREFIX)/bin
-	install -m 644 $(LIB) $(DESTDIR)$(PREFIX)/lib/
+	install -m 644 $(PUBLIC_LIB) $(DESTDIR)$(PREFIX)/lib/
 	install -m 755 $(SHLIB) $(DESTDIR)$(PREFIX)/lib/
 	ln -sf $(notdir $(SHLIB)) $(DESTDIR)$(PREFIX)/lib/$(SONAME)
 	ln -sf $(SONAME) $(DESTDIR)$(PREFIX)/lib/libbspray.so

@@ -208,19 +208,15 @@ static void declared_functions(const char *h, name_set *out)
     }
 }
 
-TEST(shared_library_exports_exactly_the_public_api)
+/* The functions include/bspray/ declares, into *OUT; 0 when the headers
+ * are not found from the working directory. */
+static int public_declarations(name_set *out, size_t *headers)
 {
-    const char *cli = harness_cli();
-    const char *slash = strrchr(cli, '/');
-    char lib[1024], cmd[1200];
-    snprintf(lib, sizeof lib, "%.*s%slibbspray.so", slash ? (int)(slash - cli) : 0, cli,
-             slash ? "/" : "");
     DIR *d = opendir("include/bspray");
     if (!d)
-        harness_skip("include/bspray not found from the working directory");
-    name_set declared = {.len = 0}, exported = {.len = 0};
+        return 0;
     struct dirent *de;
-    size_t headers = 0;
+    *headers = 0;
     while ((de = readdir(d)) != NULL) {
         size_t n = strlen(de->d_name);
         if (n < 3 || strcmp(de->d_name + n - 2, ".h") != 0)
@@ -233,22 +229,38 @@ TEST(shared_library_exports_exactly_the_public_api)
         size_t got = fread(text, 1, sizeof text - 1, f);
         fclose(f);
         text[got] = '\0';
-        declared_functions(text, &declared);
-        headers++;
+        declared_functions(text, out);
+        (*headers)++;
     }
     closedir(d);
-    snprintf(cmd, sizeof cmd, "nm -D --defined-only '%s' 2>/dev/null", lib);
+    return 1;
+}
+
+/* LIB (beside the CLI) read by `nm NM_FLAGS`: the symbols it defines for a
+ * program to link are exactly the functions the public headers declare. */
+static void check_exports(const char *lib_name, const char *nm_flags)
+{
+    const char *cli = harness_cli();
+    const char *slash = strrchr(cli, '/');
+    char lib[1024], cmd[1200];
+    snprintf(lib, sizeof lib, "%.*s%s%s", slash ? (int)(slash - cli) : 0, cli, slash ? "/" : "",
+             lib_name);
+    name_set declared = {.len = 0}, exported = {.len = 0};
+    size_t headers = 0;
+    if (!public_declarations(&declared, &headers))
+        harness_skip("include/bspray not found from the working directory");
+    snprintf(cmd, sizeof cmd, "nm %s '%s' 2>/dev/null", nm_flags, lib);
     int status;
     char *out = harness_run(cmd, &status);
     REQUIRE(out);
     if (status != 0 || !*out) {
         free(out);
-        harness_skip("nm -D could not read %s (binutils missing?)", lib);
+        harness_skip("nm could not read %s (binutils missing?)", lib);
     }
     size_t nexp = 0;
     for (char *line = strtok(out, "\n"); line; line = strtok(NULL, "\n")) {
         char addr[64], type[8], name[256];
-        if (sscanf(line, "%63s %7s %255s", addr, type, name) == 3) {
+        if (sscanf(line, "%63s %7s %255s", addr, type, name) == 3) { /* not "member.o:" */
             set_add(&exported, name, strlen(name));
             nexp++;
         }
@@ -269,5 +281,86 @@ TEST(shared_library_exports_exactly_the_public_api)
     }
     CHECK_MSG(headers >= 5 && ndecl >= 50, "%zu headers, %zu functions: parsed too few", headers,
               ndecl);
-    CHECK_MSG(nexp == ndecl, "%zu exported, %zu declared", nexp, ndecl);
+    CHECK_MSG(nexp == ndecl, "%s: %zu exported, %zu declared", lib, nexp, ndecl);
+}
+
+TEST(shared_library_exports_exactly_the_public_api)
+{
+    check_exports("libbspray.so", "-D --defined-only");
+}
+
+TEST(static_library_defines_only_the_public_api)
+{
+    check_exports("public/libbspray.a", "-g --defined-only");
+}
+
+TEST(static_library_keeps_internal_names_to_itself)
+{
+    const char *cli = harness_cli();
+    const char *slash = strrchr(cli, '/');
+    char exe[1024];
+    snprintf(exe, sizeof exe, "%.*s%stests/names_apart", slash ? (int)(slash - cli) : 0, cli,
+             slash ? "/" : "");
+    int status;
+    char *out = harness_run(exe, &status);
+    REQUIRE(out);
+    CHECK_MSG(status == 0, "'%s' exited with %d: %s", exe, status, out);
+    /* the library's own error path, and the program's own functions and data */
+    CHECK_STR_CONTAINS(out, "library: status io: /nonexistent/names_apart.nff: cannot open");
+    CHECK_STR_CONTAINS(out, "own: 42 2 3 4 5");
+    free(out);
+}
+
+/* Whether this build runs under AddressSanitizer: its shared library then
+ * cannot be loaded into a program built without it (Python). */
+#if defined(__SANITIZE_ADDRESS__)
+#define BUILT_WITH_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define BUILT_WITH_ASAN 1
+#endif
+#endif
+#ifndef BUILT_WITH_ASAN
+#define BUILT_WITH_ASAN 0
+#endif
+
+TEST(example_shoot_py_through_ctypes_prints_what_shoot_prints)
+{
+    if (BUILT_WITH_ASAN)
+        harness_skip("an AddressSanitizer build's shared library cannot be loaded into Python");
+    int status;
+    char *out = harness_run("python3 -c 'import ctypes' 2>&1", &status);
+    REQUIRE(out);
+    free(out);
+    if (status != 0)
+        harness_skip("python3 with ctypes is not available");
+    const char *cli = harness_cli();
+    const char *slash = strrchr(cli, '/');
+    char lib[1024], exe[1024], cmd[2600];
+    snprintf(lib, sizeof lib, "%.*s%slibbspray.so", slash ? (int)(slash - cli) : 0, cli,
+             slash ? "/" : "");
+    example_path("shoot", exe, sizeof exe);
+    static const char *const scenes[] = {"spd:teapot", "spd:tree"};
+    for (size_t sc = 0; sc < 2; sc++) {
+        snprintf(cmd, sizeof cmd, "python3 examples/shoot.py '%s' %s %d 2>&1", lib, scenes[sc],
+                 GRID);
+        char *py = harness_run(cmd, &status);
+        REQUIRE(py);
+        CHECK_MSG(status == 0, "'%s' exited with %d: %s", cmd, status, py);
+        snprintf(cmd, sizeof cmd, "%s %s %d", exe, scenes[sc], GRID);
+        char *c = harness_run(cmd, &status);
+        REQUIRE(c);
+        /* shoot's answers are checked against naive above */
+        CHECK_MSG(strcmp(py, c) == 0, "%s: shoot.py printed\n%s\nshoot printed\n%s", scenes[sc],
+                  py, c);
+        CHECK_STR_CONTAINS(py, "centre ray: primitive ");
+        free(py);
+        free(c);
+    }
+    snprintf(cmd, sizeof cmd, "python3 examples/shoot.py '%s' /nonexistent/x.nff 2>&1", lib);
+    char *bad = harness_run(cmd, &status);
+    REQUIRE(bad);
+    CHECK_EQ_INT(status, 1);
+    CHECK_STR_CONTAINS(bad, "/nonexistent/x.nff");
+    free(bad);
 }
