@@ -462,6 +462,34 @@ TEST(cli_build_and_tree_give_the_built_answers)
     CHECK_MSG(status == 0, "'%s': %d", cmd, status);
     CHECK_STR_CONTAINS(out, "structure: kaplan, loaded from");
     free(out);
+    /* render through the loaded tree: the very image of the built one, and
+     * its figures say the tree was loaded */
+    char png_a[1024], png_b[1024], json[1024];
+    tmp_path(png_a, sizeof png_a, "cli_tree.ppm");
+    tmp_path(png_b, sizeof png_b, "cli_built.ppm");
+    tmp_path(json, sizeof json, "cli_tree.json");
+    snprintf(cmd, sizeof cmd, "%s render spd:teapot --res 65 --tree %s -o %s --stats-json %s 2>&1",
+             cli, tree, png_a, json);
+    CHECK_RUN(cmd, 0, "wrote");
+    snprintf(cmd, sizeof cmd, "%s render spd:teapot --res 65 --accel kaplan -o %s 2>&1", cli,
+             png_b);
+    CHECK_RUN(cmd, 0, "wrote");
+    size_t na = 0, nb = 0;
+    unsigned char *ia = read_file(png_a, &na), *ib = read_file(png_b, &nb);
+    REQUIRE(ia && ib);
+    CHECK_MSG(na == nb && na > 65 * 65 * 3 && memcmp(ia, ib, na) == 0,
+              "render --tree: %zu bytes, built: %zu bytes, or they differ", na, nb);
+    free(ia);
+    free(ib);
+    size_t nj = 0;
+    unsigned char *js = read_file(json, &nj);
+    REQUIRE(js);
+    js[nj - 1] = '\0';
+    CHECK_STR_CONTAINS((const char *)js, "\"tree_file\": ");
+    CHECK_STR_CONTAINS((const char *)js, "\"T_load\": ");
+    CHECK_MSG(strstr((const char *)js, "\"T_B\"") == NULL, "%s", "a loaded tree's JSON has T_B");
+    free(js);
+
     /* usage errors and bad trees */
     snprintf(cmd, sizeof cmd, "%s render spd:teapot --tree %s --accel sah -o /dev/null 2>&1", cli,
              tree);

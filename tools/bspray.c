@@ -130,9 +130,12 @@ static void on_progress(double done, void *ctx)
     progress_update(((progress_ctx *)ctx)->bar, done);
 }
 
+/* TREE_PATH: the kd-tree file the structure was loaded from (--tree), or
+ * NULL; its time is then the load's (T_load), not a build's (T_B). */
 static void print_stats_table(FILE *f, const char *scene_name, const char *accel_name,
                               const bsp_render_stats *st, int sampling,
-                              const bsp_tree_stats *tree, const bsp_mixed_check *chk)
+                              const bsp_tree_stats *tree, const bsp_mixed_check *chk,
+                              const char *tree_path)
 {
     const bsp_ray_class_stats *P = &st->cls[BSP_RAY_PRIMARY], *S = &st->cls[BSP_RAY_SHADOW],
                               *R = &st->cls[BSP_RAY_SECONDARY];
@@ -183,7 +186,10 @@ static void print_stats_table(FILE *f, const char *scene_name, const char *accel
         fprintf(f, "| tree bytes | %" PRIu64 " |\n", tree->bytes);
         fprintf(f, "| trace copy bytes | %" PRIu64 " |\n", tree->trace_bytes);
     }
-    fprintf(f, "| T_B[s] | %.3f |\n", st->build_seconds);
+    if (tree_path)
+        fprintf(f, "| tree file | %s |\n| T_load[s] | %.3f |\n", tree_path, st->build_seconds);
+    else
+        fprintf(f, "| T_B[s] | %.3f |\n", st->build_seconds);
     fprintf(f, "| T_TR[s] | %.3f |\n", st->render_seconds);
     fprintf(f, "| Mrays/s | %.3f |\n", safe_div((double)all, st->render_seconds) * 1e-6);
 }
@@ -200,7 +206,7 @@ static void json_class(FILE *f, const char *name, const bsp_ray_class_stats *c, 
 
 static int write_stats_json(const char *path, const char *scene_name, const char *accel_name,
                             const bsp_render_stats *st, const bsp_tree_stats *tree,
-                            const bsp_mixed_check *chk)
+                            const bsp_mixed_check *chk, const char *tree_path)
 {
     FILE *f = fopen(path, "w");
     if (!f) {
@@ -242,7 +248,14 @@ static int write_stats_json(const char *path, const char *scene_name, const char
             ",\n  \"trace_bytes\": %" PRIu64 ",\n",
             tree->interior_nodes, tree->leaves, tree->empty_leaves, tree->references,
             tree->bytes, tree->trace_bytes);
-    fprintf(f, "  \"T_B\": %.6f,\n  \"T_TR\": %.6f,\n", st->build_seconds, st->render_seconds);
+    if (tree_path) {
+        fprintf(f, "  \"tree_file\": ");
+        json_string(f, tree_path);
+        fprintf(f, ",\n  \"T_load\": %.6f,\n", st->build_seconds);
+    } else {
+        fprintf(f, "  \"T_B\": %.6f,\n", st->build_seconds);
+    }
+    fprintf(f, "  \"T_TR\": %.6f,\n", st->render_seconds);
     if (chk->ran)
         fprintf(f,
                 "  \"mixed_check\": {\"kept\": \"%s\", \"cost_mixed\": %.6f, \"cost_sah\": %.6f, "
@@ -391,8 +404,10 @@ static int cmd_render(int argc, char **argv)
         bsp_mixed_check chk;
         bsp_accel_mixed_check(accel, &chk);
         if (!quiet)
-            print_stats_table(stdout, scene_path, an, &st, ropts.sampling, &tree, &chk);
-        if (json_path && !write_stats_json(json_path, scene_path, an, &st, &tree, &chk))
+            print_stats_table(stdout, scene_path, an, &st, ropts.sampling, &tree, &chk,
+                              tree_path);
+        if (json_path &&
+            !write_stats_json(json_path, scene_path, an, &st, &tree, &chk, tree_path))
             rc = EXIT_INPUT;
         if (costs) {
             bsp_image *map = costmap_draw(costs, cost_w, cost_h, cost_measure);

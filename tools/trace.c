@@ -69,6 +69,7 @@ typedef struct trace_batch {
 
 typedef struct trace_run {
     const bsp_accel *accel;
+    const char *tree_path; /* --tree: the file the structure was loaded from, else NULL */
     FILE *in;
     double in_size; /* bytes of a regular ray file, else 0: no progress bar */
     double start;
@@ -222,7 +223,11 @@ static void print_stats(FILE *f, const char *scene, const trace_run *r, const bs
             "| N_IN / N_V / N_EV / N_OIV | %" PRIu64 " / %" PRIu64 " / %" PRIu64 " / %" PRIu64
             " |\n",
             t->interior_nodes, t->leaves, t->empty_leaves, t->references);
-    fprintf(f, "| T_B[s] | %.4f |\n", bsp_accel_build_seconds(r->accel));
+    if (r->tree_path)
+        fprintf(f, "| tree file | %s |\n| T_load[s] | %.4f |\n", r->tree_path,
+                bsp_accel_build_seconds(r->accel));
+    else
+        fprintf(f, "| T_B[s] | %.4f |\n", bsp_accel_build_seconds(r->accel));
     fprintf(f, "| T_TR[s] | %.4f |\n", r->seconds);
     fprintf(f, "| threads | %d |\n", r->threads);
     fprintf(f, "| Mrays/s | %.3f |\n", r->seconds > 0 ? (double)c->rays / r->seconds * 1e-6 : 0.0);
@@ -258,8 +263,14 @@ static int write_json(const char *path, const char *scene, const trace_run *r,
             "  \"N_IN\": %" PRIu64 ",\n  \"N_V\": %" PRIu64 ",\n  \"N_EV\": %" PRIu64
             ",\n  \"N_OIV\": %" PRIu64 ",\n",
             t->interior_nodes, t->leaves, t->empty_leaves, t->references);
-    fprintf(f, "  \"T_B\": %.6f,\n  \"T_TR\": %.6f\n}\n", bsp_accel_build_seconds(r->accel),
-            r->seconds);
+    if (r->tree_path) {
+        fprintf(f, "  \"tree_file\": ");
+        json_string(f, r->tree_path);
+        fprintf(f, ",\n  \"T_load\": %.6f,\n", bsp_accel_build_seconds(r->accel));
+    } else {
+        fprintf(f, "  \"T_B\": %.6f,\n", bsp_accel_build_seconds(r->accel));
+    }
+    fprintf(f, "  \"T_TR\": %.6f\n}\n", r->seconds);
     if (fclose(f) != 0) {
         fprintf(stderr, "%s: %s: write failed: %s\n", prog, path, strerror(errno));
         return 0;
@@ -339,6 +350,7 @@ int cmd_trace(int argc, char **argv)
     apply_view_args(scene, scene_path, &view, &bopts, NULL);
     bsp_accel *accel = tree_or_build(&a, scene, &bopts, tree_path);
     run.accel = accel;
+    run.tree_path = tree_path;
     if (run.threads == 0)
         run.threads = default_threads();
     run.start = now_seconds();
