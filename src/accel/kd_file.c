@@ -292,25 +292,33 @@ static int same_bits(double a, double b)
     return memcmp(&a, &b, sizeof a) == 0;
 }
 
-/* Checks the loaded tree T over SCENE in one pass over its nodes, in array
- * order (children lie after their parent): every interior node's children
- * inside the array and after it, every node but the root claimed by exactly
- * one parent (so the nodes form one tree, each reached once), depths within
- * T's limit, split planes finite and inside their cells, leaf ranges inside
- * the reference array, references live primitives of SCENE. CELL and DEPTH
- * are scratch of T's node count. */
-static bsp_status check_structure(const kd_tree *t, const bsp_scene *scene, bsp_box *cell,
-                                  uint8_t *depth, const char *path, bsp_error *err)
+/* Checks the loaded tree T over SCENE by one walk from the root, with the
+ * cells on a stack (its depth bounded by T's limit, at most
+ * BSP_KD_MAX_DEPTH_LIMIT): every interior node's children inside the array
+ * and after it, depths within the limit, split planes finite and inside
+ * their cells, no stray flag bit, leaf ranges inside the reference array;
+ * every node reached exactly once (so the nodes form one tree); every
+ * reference a live primitive of SCENE. SEEN: scratch of T's node count. */
+static bsp_status check_structure(const kd_tree *t, const bsp_scene *scene, uint8_t *seen,
+                                  const char *path, bsp_error *err)
 {
-    const size_t np = bsp_scene_prim_count(scene);
-    memset(depth, 0xff, t->nnodes); /* 0xff: not claimed yet */
-    depth[0] = 0;
-    cell[0] = t->box;
-    for (uint32_t i = 0; i < t->nnodes; i++) {
+    struct pending {
+        uint32_t node;
+        int depth;
+        bsp_box cell;
+    } stack[BSP_KD_MAX_DEPTH_LIMIT + 2];
+    size_t top = 0, reached = 0;
+    memset(seen, 0, t->nnodes);
+    stack[top++] = (struct pending){0, 0, t->box};
+    while (top > 0) {
+        const struct pending at = stack[--top];
+        const uint32_t i = at.node;
         const kd_node *n = &t->nodes[i];
-        if (depth[i] == 0xff)
+        if (seen[i])
             return error_set(err, BSP_ERR_PARSE, path, 0,
-                             "damaged: node %u is not a child of any node", i);
+                             "damaged: node %u is the child of two nodes", i);
+        seen[i] = 1;
+        reached++;
         if (n->bits & 4u)
             return error_set(err, BSP_ERR_PARSE, path, 0, "damaged: node %u has a stray flag", i);
         if (kd_is_leaf(n)) {
@@ -327,22 +335,28 @@ static bsp_status check_structure(const kd_tree *t, const bsp_scene *scene, bsp_
             return error_set(err, BSP_ERR_PARSE, path, 0,
                              "damaged: node %u has children %u and %u of %u nodes", i, child,
                              child + 1, t->nnodes);
-        if (depth[child] != 0xff || depth[child + 1] != 0xff)
-            return error_set(err, BSP_ERR_PARSE, path, 0,
-                             "damaged: node %u's children have another parent too", i);
-        if (depth[i] + 1 > t->max_depth)
+        if (at.depth + 1 > t->max_depth)
             return error_set(err, BSP_ERR_PARSE, path, 0,
                              "damaged: node %u's children lie deeper than the limit %d", i,
                              t->max_depth);
         unsigned axis = kd_axis(n);
         double s = (double)n->u.split;
-        if (!(s >= cell[i].lo.v[axis] && s <= cell[i].hi.v[axis]))
+        if (!(s >= at.cell.lo.v[axis] && s <= at.cell.hi.v[axis]))
             return error_set(err, BSP_ERR_PARSE, path, 0,
                              "damaged: node %u splits outside its cell", i);
-        depth[child] = depth[child + 1] = (uint8_t)(depth[i] + 1);
-        cell[child] = cell[child + 1] = cell[i];
-        cell[child].hi.v[axis] = cell[child + 1].lo.v[axis] = s;
+        /* the right child waits below the left one: the stack holds at most
+         * one waiting node per level, and the depth is bounded above */
+        stack[top] = stack[top + 1] = (struct pending){child + 1, at.depth + 1, at.cell};
+        stack[top].cell.lo.v[axis] = s;
+        stack[top + 1].node = child;
+        stack[top + 1].cell.hi.v[axis] = s;
+        top += 2;
     }
+    if (reached != t->nnodes)
+        return error_set(err, BSP_ERR_PARSE, path, 0,
+                         "damaged: %zu of its %u nodes are not in the tree", t->nnodes - reached,
+                         t->nnodes);
+    const size_t np = bsp_scene_prim_count(scene);
     for (size_t k = 0; k < t->nprims; k++) {
         uint32_t p = t->prims[k];
         if (p >= np || bsp_scene_prim_kind(scene, p) == BSP_PRIM_DROPPED)
@@ -402,12 +416,10 @@ static bsp_status read_tree(FILE *f, const file_header *fh, uLong crc, kd_tree *
     if (get_u32(tail) != (uint32_t)crc)
         return error_set(err, BSP_ERR_PARSE, path, 0,
                          "damaged: its checksum does not match its contents");
-    bsp_box *cell = malloc((size_t)t->nnodes * sizeof *cell);
-    uint8_t *depth = malloc(t->nnodes);
-    bsp_status st = cell && depth ? check_structure(t, scene, cell, depth, path, err)
-                                  : error_set(err, BSP_ERR_NOMEM, path, 0, "out of memory");
-    free(cell);
-    free(depth);
+    uint8_t *seen = malloc(t->nnodes);
+    bsp_status st = seen ? check_structure(t, scene, seen, path, err)
+                         : error_set(err, BSP_ERR_NOMEM, path, 0, "out of memory");
+    free(seen);
     return st;
 }
 
