@@ -15,8 +15,8 @@
  *
  * The loader trusts nothing in the file: the counts must account for its
  * size exactly (so a damaged count cannot ask for absurd memory), the
- * checksum must match, and the structure is checked whole in one pass over
- * the nodes (check_structure) before the traversal's copies are made from
+ * checksum must match, and the structure is checked whole by one walk from
+ * the root (check_structure) before the traversal's copies are made from
  * it: no index, count or plane in the file can make a query read out of
  * bounds, recurse past the traversal's stack or loop.
  */
