@@ -10,6 +10,7 @@
 
 #include <math.h>
 #include <setjmp.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,6 +37,20 @@ static inline double harness_rnd(unsigned long long *s)
     *s ^= *s << 25;
     *s ^= *s >> 27;
     return (double)((*s * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+}
+/* Marsaglia's xorshift64 step (13, 7, 17) of the state *S, and a uniform
+ * double in [0, 1) from it: the generator of the older tests, kept so that
+ * their seeds give the same cases. */
+static inline uint64_t harness_xorshift64(uint64_t *s)
+{
+    *s ^= *s << 13;
+    *s ^= *s >> 7;
+    *s ^= *s << 17;
+    return *s;
+}
+static inline double harness_xorshift_unit(uint64_t *s)
+{
+    return (double)(harness_xorshift64(s) >> 11) * (1.0 / 9007199254740992.0);
 }
 /* A fresh temporary directory for this run (created on first use). */
 const char *harness_tmpdir(void);

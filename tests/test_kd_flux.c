@@ -87,13 +87,6 @@ TEST(flux_measure_counts_segments_that_start_or_end_inside)
     kd_flux_free(&f);
 }
 
-static double rng_unit(uint64_t *s)
-{
-    *s ^= *s << 13;
-    *s ^= *s >> 7;
-    *s ^= *s << 17;
-    return (double)(*s >> 11) * (1.0 / 9007199254740992.0);
-}
 
 /* Isotropic uniformly distributed lines (direction uniform on the sphere,
  * offset uniform on a disc around the box) hit a convex body in proportion
@@ -107,12 +100,12 @@ TEST(flux_measure_of_uniform_lines_is_the_surface_area)
     bsp_vec3 c = bsp_v3(1, 0, 1);
     double R = 3.1; /* > the half diagonal, 3 */
     for (int i = 0; i < N; i++) {
-        double z = 2.0 * rng_unit(&rng) - 1.0, phi = 2.0 * BSP_PI * rng_unit(&rng);
+        double z = 2.0 * harness_xorshift_unit(&rng) - 1.0, phi = 2.0 * BSP_PI * harness_xorshift_unit(&rng);
         double rxy = sqrt(1.0 - z * z);
         bsp_vec3 d = bsp_v3(rxy * cos(phi), rxy * sin(phi), z);
         bsp_vec3 a = fabs(d.x) < 0.9 ? bsp_v3(1, 0, 0) : bsp_v3(0, 1, 0);
         bsp_vec3 u = v3_normalize(v3_cross(d, a)), v = v3_cross(d, u);
-        double r = R * sqrt(rng_unit(&rng)), th = 2.0 * BSP_PI * rng_unit(&rng);
+        double r = R * sqrt(harness_xorshift_unit(&rng)), th = 2.0 * BSP_PI * harness_xorshift_unit(&rng);
         bsp_vec3 p = v3_add(c, v3_add(v3_scale(u, r * cos(th)), v3_scale(v, r * sin(th))));
         seg[i] = (kd_flux_segment){v3_sub(p, v3_scale(d, 10.0)), d, 0.0, 20.0};
     }

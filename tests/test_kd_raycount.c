@@ -85,10 +85,7 @@ TEST(raycount_counts_segments_by_hand)
 static uint64_t rng;
 static double urand(void)
 {
-    rng ^= rng << 13;
-    rng ^= rng >> 7;
-    rng ^= rng << 17;
-    return (double)(rng >> 11) * (1.0 / 9007199254740992.0);
+    return harness_xorshift_unit(&rng);
 }
 
 /* Whether the segment S meets box B: an independent brute force, by

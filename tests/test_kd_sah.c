@@ -2107,9 +2107,7 @@ TEST(sah_event_rounding_is_the_nearest_float_outward)
         if (i < sizeof special / sizeof *special) {
             x = special[i];
         } else {
-            r ^= r << 13;
-            r ^= r >> 7;
-            r ^= r << 17;
+            harness_xorshift64(&r);
             x = ldexp((double)(int64_t)r, (int)(r >> 56) - 200); /* 2^-263 .. 2^118 */
         }
         float d = round_down(x), u = round_up(x);

@@ -309,17 +309,10 @@ TEST(view_mixed_prepass_share)
 
 #include "accel/kd_sah.h"
 
-static double rng_unit(uint64_t *s)
-{
-    *s ^= *s << 13;
-    *s ^= *s >> 7;
-    *s ^= *s << 17;
-    return (double)(*s >> 11) * (1.0 / 9007199254740992.0);
-}
 
 static double rng_in(uint64_t *s, double a, double b)
 {
-    return a + (b - a) * rng_unit(s);
+    return a + (b - a) * harness_xorshift_unit(s);
 }
 
 /* A random view: eye in [-5, 5]^3, any direction, viewport half sizes
@@ -334,7 +327,7 @@ static kd_view random_view(uint64_t *rng, int ortho)
     bsp_vec3 f;
     for (int k = 0; k < 3; k++)
         f.v[k] = rng_in(rng, -1, 1);
-    if (rng_unit(rng) < 0.2)
+    if (harness_xorshift_unit(rng) < 0.2)
         f = bsp_v3(0, 0, 1);
     v.fwd = v3_normalize(f);
     bsp_vec3 up = fabs(v.fwd.z) > 0.9 ? bsp_v3(0, 1, 0) : bsp_v3(0, 0, 1);
@@ -349,7 +342,7 @@ static kd_view random_view(uint64_t *rng, int ortho)
  * the eye plane), or anywhere. */
 static bsp_box random_cell(uint64_t *rng, const kd_view *v)
 {
-    double size = pow(10.0, rng_in(rng, -4, 1)), u = rng_unit(rng);
+    double size = pow(10.0, rng_in(rng, -4, 1)), u = harness_xorshift_unit(rng);
     bsp_box b;
     for (int k = 0; k < 3; k++) {
         double w = size * rng_in(rng, 0.05, 1.0);
@@ -390,10 +383,10 @@ TEST(view_measures_monotone_and_covering_within_their_noise)
                 continue;
             }
             double lo = cell.lo.v[k], hi = cell.hi.v[k];
-            double p = lo + (hi - lo) * rng_unit(&rng), q = lo + (p - lo) * rng_unit(&rng);
-            if (rng_unit(&rng) < 0.2) /* a plane close to the eye */
+            double p = lo + (hi - lo) * harness_xorshift_unit(&rng), q = lo + (p - lo) * harness_xorshift_unit(&rng);
+            if (harness_xorshift_unit(&rng) < 0.2) /* a plane close to the eye */
                 p = mm.view.eye.v[k] + (hi - lo) * pow(10.0, rng_in(&rng, -12, -2)) *
-                                           (rng_unit(&rng) < 0.5 ? -1 : 1);
+                                           (harness_xorshift_unit(&rng) < 0.5 ? -1 : 1);
             if (!(p > lo && p < hi && q > lo && q <= p) || (p >= zone[0] && p <= zone[1]) ||
                 (q >= zone[0] && q <= zone[1]))
                 continue;
@@ -549,22 +542,22 @@ TEST(pruned_view_sweep_picks_the_full_sweeps_plane)
             mm.count = &cur;
             mm.w_count = rng_in(&rng, 0.1, 1.0) / (double)(rc.nseg ? rc.nseg : 1);
         }
-        size_t n = 1 + (size_t)(rng_unit(&rng) * (rng_unit(&rng) < 0.3 ? MAXN : 40));
-        double grid = rng_unit(&rng) < 0.3 ? 0.05 : 0.0; /* shared positions */
+        size_t n = 1 + (size_t)(harness_xorshift_unit(&rng) * (harness_xorshift_unit(&rng) < 0.3 ? MAXN : 40));
+        double grid = harness_xorshift_unit(&rng) < 0.3 ? 0.05 : 0.0; /* shared positions */
         sah_build b;
         memset(&b, 0, sizeof b);
         b.area = kind >= 2 ? kd_mixed_area : kd_view_area;
         b.actx = kind >= 2 ? (const void *)&mm : (const void *)&mm.view;
         b.ctrav = 1.0;
-        b.bonus_mul = rng_unit(&rng) < 0.5 ? 0.9 : 1.0;
-        b.mailbox = rng_unit(&rng) < 0.7;
+        b.bonus_mul = harness_xorshift_unit(&rng) < 0.5 ? 0.9 : 1.0;
+        b.mailbox = harness_xorshift_unit(&rng) < 0.7;
         b.mb_hit = 0.15;
-        b.cost_mode = rng_unit(&rng) < 0.5 ? COST_UNIFORM : COST_ARRAY;
+        b.cost_mode = harness_xorshift_unit(&rng) < 0.5 ? COST_UNIFORM : COST_ARRAY;
         b.unif = b.cost_mode == COST_UNIFORM ? 2.0 : 0.0;
         b.cost = b.cost_mode == COST_ARRAY ? cost : NULL;
         double tsum = 0.0;
         for (size_t p = 0; p < n; p++) {
-            cost[p] = 0.25 * (double)(1 + (int)(rng_unit(&rng) * 16)); /* exact sums */
+            cost[p] = 0.25 * (double)(1 + (int)(harness_xorshift_unit(&rng) * 16)); /* exact sums */
             tsum += b.cost_mode == COST_UNIFORM ? b.unif : cost[p];
             for (unsigned k = 0; k < 3; k++) {
                 double lo = cell.lo.v[k], w = cell.hi.v[k] - lo;

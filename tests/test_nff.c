@@ -642,10 +642,7 @@ static uint64_t rng_state = 0x9e3779b97f4a7c15u;
 
 static uint64_t rng(void)
 {
-    rng_state ^= rng_state << 13;
-    rng_state ^= rng_state >> 7;
-    rng_state ^= rng_state << 17;
-    return rng_state;
+    return harness_xorshift64(&rng_state);
 }
 
 /* A random decimal token (finite, possibly negative when SIGNED) into BUF. */

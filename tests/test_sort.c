@@ -22,10 +22,7 @@ static int cmp_u64(const void *x, const void *y)
 static uint64_t rng = 88172645463325252ull;
 static uint64_t next_u64(void)
 {
-    rng ^= rng << 13;
-    rng ^= rng >> 7;
-    rng ^= rng << 17;
-    return rng;
+    return harness_xorshift64(&rng);
 }
 
 /* Fills A[0..N) by pattern P. */
