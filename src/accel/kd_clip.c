@@ -52,6 +52,19 @@ static bsp_box points_box(const bsp_vec3 *v, size_t n)
     return b;
 }
 
+static inline __attribute__((always_inline)) void add_point(double lo[3], double hi[3], double x,
+                                                            double y, double z);
+
+/* The same bounds as points_box, into LO and HI (add_point is box_add_point's
+ * comparisons). */
+static void points_bounds(const bsp_vec3 *v, size_t n, double lo[3], double hi[3])
+{
+    lo[0] = lo[1] = lo[2] = INFINITY;
+    hi[0] = hi[1] = hi[2] = -INFINITY;
+    for (size_t i = 0; i < n; i++)
+        add_point(lo, hi, v[i].x, v[i].y, v[i].z);
+}
+
 /* Clips the closed polygon IN[0..N) to x[k] >= c (ABOVE) or x[k] <= c;
  * writes at most 2N vertices to OUT and returns their count. Coordinates are
  * kept in locals and written whole (writing one component of a vertex just
@@ -326,17 +339,22 @@ static int clip_triangle(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g, bsp_
 /* Clamps the bounds B of a clipped part to the unclipped bounds PB and to G
  * (both contain the true part), pads them by PAD into *OUT; 0 when the
  * clamp leaves nothing. */
-static int finish(bsp_box b, bsp_box pb, const bsp_box *g, double pad, bsp_box *out)
+static int finish(const double blo[3], const double bhi[3], const bsp_box *pb, const bsp_box *g,
+                  double pad, bsp_box *out)
 {
+    /* in scalars, written once: a box stored a double at a time and then
+     * copied whole stalled on store forwarding (session 31) */
+    double lo[3], hi[3];
     for (int k = 0; k < 3; k++) {
-        b.lo.v[k] = dmax(dmax(b.lo.v[k], pb.lo.v[k]), g->lo.v[k]);
-        b.hi.v[k] = dmin(dmin(b.hi.v[k], pb.hi.v[k]), g->hi.v[k]);
-        if (b.lo.v[k] > b.hi.v[k])
+        lo[k] = dmax(dmax(blo[k], pb->lo.v[k]), g->lo.v[k]);
+        hi[k] = dmin(dmin(bhi[k], pb->hi.v[k]), g->hi.v[k]);
+        if (lo[k] > hi[k])
             return 0;
-        b.lo.v[k] -= pad;
-        b.hi.v[k] += pad;
     }
-    *out = b;
+    for (int k = 0; k < 3; k++) {
+        out->lo.v[k] = lo[k] - pad;
+        out->hi.v[k] = hi[k] + pad;
+    }
     return 1;
 }
 
@@ -531,7 +549,7 @@ int kd_clip_prim_bounded(const bsp_scene *scene, uint32_t prim, bsp_box pb, cons
         }
         if (r != 1)
             return r;
-        return finish(b, pb, &g, pad, out);
+        return finish(b.lo.v, b.hi.v, &pb, &g, pad, out);
     }
     *out = box_grow(b, pad);
     return 1;
@@ -586,7 +604,7 @@ static int clip_triangle_split(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g
                 continue;
             b = sb[c];
         }
-        if (finish(b, pb, &gc, pad, &out[c]) == 1)
+        if (finish(b.lo.v, b.hi.v, &pb, &gc, pad, &out[c]) == 1)
             got |= 1 << c;
     }
     return got;
@@ -637,12 +655,12 @@ static int path_reserve(kd_clip_path *path, size_t more)
 /* The handle of the part whose M vertices lie at the path's top + 2, with
  * its bounds B stored in the two slots before them (0 and nothing kept:
  * more than KD_PART_MAX_VERTS; the child clips the primitive afresh). */
-static uint64_t path_keep(kd_clip_path *path, size_t m, bsp_box b)
+static uint64_t path_keep(kd_clip_path *path, size_t m, const double lo[3], const double hi[3])
 {
     if (m > KD_PART_MAX_VERTS)
         return 0;
-    path->v[path->top] = b.lo;
-    path->v[path->top + 1] = b.hi;
+    path->v[path->top] = bsp_v3(lo[0], lo[1], lo[2]);
+    path->v[path->top + 1] = bsp_v3(hi[0], hi[1], hi[2]);
     uint64_t h = ((uint64_t)path->top << KD_PART_COUNT_BITS) | m;
     path->top += m + 2;
     return h;
@@ -695,7 +713,7 @@ static int part_afresh(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
     *cur = got;
     if (clipped) { /* kept for the children */
         *cur = path->v + path->top + 2;
-        *part = path_keep(path, *n, *pc);
+        *part = path_keep(path, *n, pc->lo.v, pc->hi.v);
     }
     return 1;
 }
@@ -705,7 +723,14 @@ int kd_clip_split_part(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
                        kd_clip_scratch *scr, uint64_t part, bsp_box out[2], uint64_t parts[2])
 {
     parts[0] = parts[1] = 0;
-    const bsp_box g = box_grow(*cell, pad);
+    /* G and each child's GC made a double at a time and never copied whole
+     * (box_grow, a copy: a box stored by parts and read back at once stalls
+     * on store forwarding) */
+    bsp_box g;
+    for (int k = 0; k < 3; k++) {
+        g.lo.v[k] = cell->lo.v[k] - pad;
+        g.hi.v[k] = cell->hi.v[k] + pad;
+    }
     if (box_is_empty(pb) || !box_meets(pb, &g))
         return 0;
     size_t n;
@@ -729,7 +754,11 @@ int kd_clip_split_part(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
     const double cl = s + pad, cr = s - pad;
     int got = 0;
     for (int c = 0; c < 2; c++) {
-        bsp_box gc = g;
+        bsp_box gc;
+        for (int k = 0; k < 3; k++) {
+            gc.lo.v[k] = cell->lo.v[k] - pad;
+            gc.hi.v[k] = cell->hi.v[k] + pad;
+        }
         if (c == 0)
             gc.hi.v[axis] = cl;
         else
@@ -739,19 +768,22 @@ int kd_clip_split_part(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
             got |= 1 << c;
             continue;
         }
-        bsp_box b;
+        double blo[3], bhi[3];
         if (c == 0 ? pc.hi.v[axis] <= cl : pc.lo.v[axis] >= cr) {
-            b = pc; /* the part lies on this side: the child keeps it */
+            for (int k = 0; k < 3; k++) { /* the part lies on this side: the child keeps it */
+                blo[k] = pc.lo.v[k];
+                bhi[k] = pc.hi.v[k];
+            }
             parts[c] = part;
         } else {
             bsp_vec3 *dst = path->v + path->top + 2;
             size_t m = clip_plane(cur, n, dst, (int)axis, c == 0 ? cl : cr, c == 1);
             if (m == 0)
                 continue;
-            b = points_box(dst, m);
-            parts[c] = path_keep(path, m, b);
+            points_bounds(dst, m, blo, bhi);
+            parts[c] = path_keep(path, m, blo, bhi);
         }
-        if (finish(b, pb, &gc, pad, &out[c]) == 1)
+        if (finish(blo, bhi, &pb, &gc, pad, &out[c]) == 1)
             got |= 1 << c;
         else
             parts[c] = 0;
