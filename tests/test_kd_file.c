@@ -498,6 +498,10 @@ TEST(cli_build_and_tree_give_the_built_answers)
     CHECK_EQ_INT(status, 2);
     CHECK_STR_CONTAINS(out, "--accel");
     free(out);
+    /* options that do not shape a tree are allowed beside it */
+    snprintf(cmd, sizeof cmd, "%s stats spd:teapot --tree %s --build-threads 1 --max-tree-mb 64", cli,
+             tree);
+    CHECK_RUN(cmd, 0, "structure: kaplan, loaded from");
     snprintf(cmd, sizeof cmd, "%s render spd:balls --tree %s -o /dev/null 2>&1", cli, tree);
     out = harness_run(cmd, &status);
     REQUIRE(out);

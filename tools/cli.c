@@ -442,7 +442,9 @@ int parse_build_arg(args *a, bsp_build_options *opts)
     } else {
         return 0;
     }
-    if (!a->build_opt)
+    /* what --tree refuses beside it: the options that shape a tree (not the
+     * build's threads or its size limit, which a saved tree does not need) */
+    if (!a->build_opt && strcmp(s, "--build-threads") != 0 && strcmp(s, "--max-tree-mb") != 0)
         a->build_opt = s;
     return 1;
 }
@@ -450,7 +452,8 @@ int parse_build_arg(args *a, bsp_build_options *opts)
 const char tree_arg_help[] =
     "  --tree FILE        use the kd-tree saved in FILE (bspray build) instead of building\n"
     "                     one: built for this very scene (its primitives are checked),\n"
-    "                     with the method and options it was built with\n";
+    "                     with the method and options it was built with (so no option\n"
+    "                     that shapes a tree may be given beside it)\n";
 
 bsp_accel *tree_or_build(const args *a, const bsp_scene *scene, const bsp_build_options *opts,
                          const char *tree_path)

@@ -19,7 +19,8 @@ typedef struct args {
     int argc, i;
     char **argv;
     const char *usage;
-    const char *build_opt; /* the first build option parse_build_arg took, or NULL */
+    const char *build_opt; /* the first option parse_build_arg took that shapes a tree
+                              (not --build-threads, --max-tree-mb), or NULL */
 } args;
 
 /* Prints "bspray: " FMT (with ARG), the usage line and a hint; exits 2. */
