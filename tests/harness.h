@@ -57,6 +57,11 @@ const char *harness_tmpdir(void);
 /* Everything F has left, NUL-terminated (malloc'd), or NULL when out of
  * memory. */
 char *harness_read_all(FILE *f);
+/* The whole file PATH (malloc'd, NUL-terminated after its *LEN bytes), or
+ * NULL when it cannot be opened or read. */
+unsigned char *harness_read_file(const char *path, size_t *len);
+/* BUF: the path of NAME in this run's temporary directory. */
+void harness_tmp_path(char *buf, size_t size, const char *name);
 /* Runs CMD through the shell; returns its standard output (malloc'd, NUL
  * terminated; NULL when it cannot run) and sets *STATUS to its exit status
  * (-1 when it did not exit normally). */

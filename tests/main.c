@@ -86,7 +86,8 @@ const char *harness_cli(void)
     return env && *env ? env : "build/bspray";
 }
 
-char *harness_read_all(FILE *f)
+/* Everything F has left, NUL-terminated, its length in *LEN. */
+static char *read_stream(FILE *f, size_t *out_len)
 {
     size_t cap = 1 << 16, len = 0, n;
     char *buf = malloc(cap);
@@ -104,7 +105,29 @@ char *harness_read_all(FILE *f)
     }
     if (buf)
         buf[len] = 0;
+    *out_len = len;
     return buf;
+}
+
+char *harness_read_all(FILE *f)
+{
+    size_t len;
+    return read_stream(f, &len);
+}
+
+unsigned char *harness_read_file(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    char *buf = read_stream(f, len);
+    fclose(f);
+    return (unsigned char *)buf;
+}
+
+void harness_tmp_path(char *buf, size_t size, const char *name)
+{
+    snprintf(buf, size, "%s/%s", harness_tmpdir(), name);
 }
 
 long harness_count_color(const struct bsp_image *img, int i)

@@ -172,12 +172,8 @@ static double json_number(const char *j, const char *key)
 
 static char *read_file(const char *path)
 {
-    FILE *f = fopen(path, "r");
-    if (!f)
-        return NULL;
-    char *s = harness_read_all(f);
-    fclose(f);
-    return s;
+    size_t len;
+    return (char *)harness_read_file(path, &len);
 }
 
 TEST(cli_trace_threads_exact_and_stats)

@@ -17,14 +17,23 @@
 #include "harness.h"
 #include "kd_test_util.h"
 
-/* examples/NAME's binary beside the CLI's build directory (BUF: room). */
-static const char *example_path(const char *name, char *buf, size_t size)
+/* REL in the CLI's build directory (BUF: room): the libraries, examples/
+ * and tests/ binaries the Makefile builds there. */
+static const char *beside_cli(const char *rel, char *buf, size_t size)
 {
     const char *cli = harness_cli();
     const char *slash = strrchr(cli, '/');
     int dir = slash ? (int)(slash - cli) : 0;
-    snprintf(buf, size, "%.*s%sexamples/%s", dir, cli, slash ? "/" : "", name);
+    snprintf(buf, size, "%.*s%s%s", dir, cli, slash ? "/" : "", rel);
     return buf;
+}
+
+/* examples/NAME's binary beside the CLI. */
+static const char *example_path(const char *name, char *buf, size_t size)
+{
+    char rel[256];
+    snprintf(rel, sizeof rel, "examples/%s", name);
+    return beside_cli(rel, buf, size);
 }
 
 /* The number of rays of examples/shoot.c's G x G grid around the centre
@@ -240,11 +249,8 @@ static int public_declarations(name_set *out, size_t *headers)
  * program to link are exactly the functions the public headers declare. */
 static void check_exports(const char *lib_name, const char *nm_flags)
 {
-    const char *cli = harness_cli();
-    const char *slash = strrchr(cli, '/');
     char lib[1024], cmd[1200];
-    snprintf(lib, sizeof lib, "%.*s%s%s", slash ? (int)(slash - cli) : 0, cli, slash ? "/" : "",
-             lib_name);
+    beside_cli(lib_name, lib, sizeof lib);
     name_set declared = {.len = 0}, exported = {.len = 0};
     size_t headers = 0;
     if (!public_declarations(&declared, &headers))
@@ -296,11 +302,8 @@ TEST(static_library_defines_only_the_public_api)
 
 TEST(static_library_keeps_internal_names_to_itself)
 {
-    const char *cli = harness_cli();
-    const char *slash = strrchr(cli, '/');
     char exe[1024];
-    snprintf(exe, sizeof exe, "%.*s%stests/names_apart", slash ? (int)(slash - cli) : 0, cli,
-             slash ? "/" : "");
+    beside_cli("tests/names_apart", exe, sizeof exe);
     int status;
     char *out = harness_run(exe, &status);
     REQUIRE(out);
@@ -334,11 +337,8 @@ TEST(example_shoot_py_through_ctypes_prints_what_shoot_prints)
     free(out);
     if (status != 0)
         harness_skip("python3 with ctypes is not available");
-    const char *cli = harness_cli();
-    const char *slash = strrchr(cli, '/');
     char lib[1024], exe[1024], cmd[2600];
-    snprintf(lib, sizeof lib, "%.*s%slibbspray.so", slash ? (int)(slash - cli) : 0, cli,
-             slash ? "/" : "");
+    beside_cli("libbspray.so", lib, sizeof lib);
     example_path("shoot", exe, sizeof exe);
     static const char *const scenes[] = {"spd:teapot", "spd:tree"};
     for (size_t sc = 0; sc < 2; sc++) {

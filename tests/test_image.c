@@ -24,38 +24,6 @@
 
 /* --- helpers ------------------------------------------------------------------ */
 
-static void tmp_path(char *buf, size_t size, const char *name)
-{
-    snprintf(buf, size, "%s/%s", harness_tmpdir(), name);
-}
-
-/* The whole file; NULL if it cannot be read. Free with free(). */
-static unsigned char *slurp(const char *path, size_t *len)
-{
-    FILE *fp = fopen(path, "rb");
-    if (!fp)
-        return NULL;
-    size_t cap = 4096, n = 0;
-    unsigned char *buf = malloc(cap);
-    size_t got;
-    while (buf && (got = fread(buf + n, 1, cap - n, fp)) > 0) {
-        n += got;
-        if (n == cap) {
-            unsigned char *nb = realloc(buf, cap * 2);
-            if (!nb) {
-                free(buf);
-                buf = NULL;
-                break;
-            }
-            buf = nb;
-            cap *= 2;
-        }
-    }
-    fclose(fp);
-    *len = n;
-    return buf;
-}
-
 static int spit(const char *path, const void *data, size_t len)
 {
     FILE *fp = fopen(path, "wb");
@@ -163,7 +131,7 @@ TEST(image_create_limits)
 TEST(image_png_roundtrip_quantization)
 {
     char path[512];
-    tmp_path(path, sizeof path, "roundtrip.png");
+    harness_tmp_path(path, sizeof path, "roundtrip.png");
     bsp_image *img = make_sample_image(4, 3);
     REQUIRE(img != NULL);
     bsp_error err = {0};
@@ -195,7 +163,7 @@ TEST(image_png_roundtrip_quantization)
 TEST(image_png_orientation_and_size)
 {
     char path[512];
-    tmp_path(path, sizeof path, "orient.png");
+    harness_tmp_path(path, sizeof path, "orient.png");
     bsp_image *img = bsp_image_create(5, 7);
     REQUIRE(img != NULL);
     for (int y = 0; y < 7; y++)
@@ -218,7 +186,7 @@ TEST(image_png_orientation_and_size)
 
     /* The file is an 8-bit RGB, non-interlaced PNG: check the IHDR bytes. */
     size_t len = 0;
-    unsigned char *data = slurp(path, &len);
+    unsigned char *data = harness_read_file(path, &len);
     REQUIRE(data != NULL);
     CHECK(len > 33);
     if (len > 33) {
@@ -234,7 +202,7 @@ TEST(image_png_orientation_and_size)
 TEST(image_read_gray_png)
 {
     char path[512];
-    tmp_path(path, sizeof path, "gray.png");
+    harness_tmp_path(path, sizeof path, "gray.png");
     unsigned char r0[3] = {0, 128, 255}, r1[3] = {7, 200, 1};
     unsigned char *rows[2] = {r0, r1};
     REQUIRE(write_raw_png(path, 3, 2, PNG_COLOR_TYPE_GRAY, 8, PNG_INTERLACE_NONE, NULL, 0,
@@ -256,7 +224,7 @@ TEST(image_read_gray_png)
 TEST(image_read_rgba_png)
 {
     char path[512];
-    tmp_path(path, sizeof path, "rgba.png");
+    harness_tmp_path(path, sizeof path, "rgba.png");
     unsigned char r0[8] = {10, 20, 30, 255, 40, 50, 60, 0};
     unsigned char r1[8] = {255, 0, 1, 128, 9, 99, 199, 1};
     unsigned char *rows[2] = {r0, r1};
@@ -281,7 +249,7 @@ TEST(image_read_palette_16bit_lowbit_interlaced_png)
     bsp_error err = {0};
 
     /* Palette, 8 bits per index. */
-    tmp_path(path, sizeof path, "palette.png");
+    harness_tmp_path(path, sizeof path, "palette.png");
     png_color pal[3] = {{1, 2, 3}, {200, 100, 50}, {255, 255, 0}};
     unsigned char p0[3] = {0, 1, 2};
     unsigned char *prow[1] = {p0};
@@ -296,7 +264,7 @@ TEST(image_read_palette_16bit_lowbit_interlaced_png)
     img = NULL;
 
     /* 16-bit RGB: the high byte is kept. */
-    tmp_path(path, sizeof path, "rgb16.png");
+    harness_tmp_path(path, sizeof path, "rgb16.png");
     unsigned char s0[12] = {0x12, 0x34, 0xff, 0xff, 0x00, 0x01, 0x80, 0x00, 0x7f, 0xff, 0x01, 0x00};
     unsigned char *srow[1] = {s0};
     REQUIRE(write_raw_png(path, 2, 1, PNG_COLOR_TYPE_RGB, 16, PNG_INTERLACE_NONE, NULL, 0,
@@ -309,7 +277,7 @@ TEST(image_read_palette_16bit_lowbit_interlaced_png)
     img = NULL;
 
     /* 1-bit gray: 0 -> 0, 1 -> 255. */
-    tmp_path(path, sizeof path, "gray1.png");
+    harness_tmp_path(path, sizeof path, "gray1.png");
     unsigned char g0[1] = {0xa0}; /* 1 0 1 0 */
     unsigned char *grow[1] = {g0};
     REQUIRE(write_raw_png(path, 4, 1, PNG_COLOR_TYPE_GRAY, 1, PNG_INTERLACE_NONE, NULL, 0,
@@ -324,7 +292,7 @@ TEST(image_read_palette_16bit_lowbit_interlaced_png)
     img = NULL;
 
     /* Adam7-interlaced RGB, 9 x 9. */
-    tmp_path(path, sizeof path, "interlaced.png");
+    harness_tmp_path(path, sizeof path, "interlaced.png");
     unsigned char data[9][27];
     unsigned char *irows[9];
     for (int y = 0; y < 9; y++) {
@@ -350,14 +318,14 @@ TEST(image_read_palette_16bit_lowbit_interlaced_png)
 TEST(image_ppm_bytes)
 {
     char path[512];
-    tmp_path(path, sizeof path, "out.ppm");
+    harness_tmp_path(path, sizeof path, "out.ppm");
     bsp_image *img = make_sample_image(4, 3);
     REQUIRE(img != NULL);
     bsp_error err = {0};
     CHECK_EQ_INT(bsp_image_write_ppm(img, path, &err), BSP_OK);
 
     size_t len = 0;
-    unsigned char *data = slurp(path, &len);
+    unsigned char *data = harness_read_file(path, &len);
     REQUIRE(data != NULL);
     static const char header[] = "P6\n4 3\n255\n";
     size_t hl = sizeof header - 1;
@@ -386,11 +354,11 @@ TEST(image_write_by_extension)
     REQUIRE(img != NULL);
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
         char path[512];
-        tmp_path(path, sizeof path, names[i]);
+        harness_tmp_path(path, sizeof path, names[i]);
         bsp_error err = {0};
         CHECK_MSG(bsp_image_write(img, path, &err) == BSP_OK, "%s: %s", names[i], err.message);
         size_t len = 0;
-        unsigned char *data = slurp(path, &len);
+        unsigned char *data = harness_read_file(path, &len);
         CHECK(data != NULL && len >= 8);
         if (data && len >= 8) {
             if (is_ppm[i])
@@ -408,7 +376,7 @@ TEST(image_write_by_extension)
 TEST(image_write_errors)
 {
     char path[512];
-    tmp_path(path, sizeof path, "no/such/dir/out.png");
+    harness_tmp_path(path, sizeof path, "no/such/dir/out.png");
     bsp_image *img = make_sample_image(2, 2);
     REQUIRE(img != NULL);
 
@@ -418,7 +386,7 @@ TEST(image_write_errors)
     CHECK_STR_CONTAINS(err.message, path);
     CHECK_STR_CONTAINS(err.message, "No such file or directory");
 
-    tmp_path(path, sizeof path, "no/such/dir/out.ppm");
+    harness_tmp_path(path, sizeof path, "no/such/dir/out.ppm");
     memset(&err, 0, sizeof err);
     CHECK_EQ_INT(bsp_image_write_ppm(img, path, &err), BSP_ERR_IO);
     CHECK_EQ_INT(err.status, BSP_ERR_IO);
@@ -438,7 +406,7 @@ TEST(image_write_errors)
     CHECK_STR_CONTAINS(err.message, harness_tmpdir());
 
     /* Bad arguments. */
-    tmp_path(path, sizeof path, "never.png");
+    harness_tmp_path(path, sizeof path, "never.png");
     CHECK_EQ_INT(bsp_image_write_png(NULL, path, &err), BSP_ERR_INVALID);
     CHECK_EQ_INT(bsp_image_write_ppm(NULL, path, &err), BSP_ERR_INVALID);
     CHECK_EQ_INT(bsp_image_write(img, NULL, &err), BSP_ERR_INVALID);
@@ -455,7 +423,7 @@ TEST(image_read_errors)
     bsp_image *img = (bsp_image *)&err; /* must be reset to NULL on failure */
 
     /* Missing file. */
-    tmp_path(path, sizeof path, "missing.png");
+    harness_tmp_path(path, sizeof path, "missing.png");
     CHECK_EQ_INT(bsp_image_read_png(path, &img, &err), BSP_ERR_IO);
     CHECK(img == NULL);
     CHECK_EQ_INT(err.status, BSP_ERR_IO);
@@ -463,7 +431,7 @@ TEST(image_read_errors)
     CHECK_EQ_INT(bsp_image_read_png(path, &img, NULL), BSP_ERR_IO);
 
     /* Not a PNG (and one shorter than a signature). */
-    tmp_path(path, sizeof path, "text.png");
+    harness_tmp_path(path, sizeof path, "text.png");
     static const char text[] = "this is not a PNG file, just some text\n";
     REQUIRE(spit(path, text, sizeof text - 1) == 0);
     memset(&err, 0, sizeof err);
@@ -479,17 +447,17 @@ TEST(image_read_errors)
 
     /* A real PNG, then truncated versions of it. */
     char good[512];
-    tmp_path(good, sizeof good, "good.png");
+    harness_tmp_path(good, sizeof good, "good.png");
     bsp_image *src = make_sample_image(16, 16);
     REQUIRE(src != NULL);
     REQUIRE(bsp_image_write_png(src, good, NULL) == BSP_OK);
     bsp_image_destroy(src);
     size_t len = 0;
-    unsigned char *data = slurp(good, &len);
+    unsigned char *data = harness_read_file(good, &len);
     REQUIRE(data != NULL);
     REQUIRE(len > 60);
 
-    tmp_path(path, sizeof path, "trunc40.png");
+    harness_tmp_path(path, sizeof path, "trunc40.png");
     REQUIRE(spit(path, data, 40) == 0);
     memset(&err, 0, sizeof err);
     img = (bsp_image *)&err;
@@ -499,7 +467,7 @@ TEST(image_read_errors)
     CHECK_STR_CONTAINS(err.message, path);
 
     /* Cut inside the image data. */
-    tmp_path(path, sizeof path, "trunc_mid.png");
+    harness_tmp_path(path, sizeof path, "trunc_mid.png");
     REQUIRE(spit(path, data, len / 2 + 20) == 0);
     memset(&err, 0, sizeof err);
     CHECK_EQ_INT(bsp_image_read_png(path, &img, &err), BSP_ERR_IO);
@@ -508,7 +476,7 @@ TEST(image_read_errors)
     CHECK_EQ_INT(bsp_image_read_png(path, &img, NULL), BSP_ERR_IO);
 
     /* Missing the IEND chunk. */
-    tmp_path(path, sizeof path, "trunc_end.png");
+    harness_tmp_path(path, sizeof path, "trunc_end.png");
     REQUIRE(spit(path, data, len - 12) == 0);
     memset(&err, 0, sizeof err);
     CHECK_EQ_INT(bsp_image_read_png(path, &img, &err), BSP_ERR_IO);
@@ -516,7 +484,7 @@ TEST(image_read_errors)
     CHECK_STR_CONTAINS(err.message, path);
 
     /* A corrupted IHDR CRC. */
-    tmp_path(path, sizeof path, "badcrc.png");
+    harness_tmp_path(path, sizeof path, "badcrc.png");
     data[30] ^= 0xff;
     REQUIRE(spit(path, data, len) == 0);
     memset(&err, 0, sizeof err);

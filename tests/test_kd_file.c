@@ -22,26 +22,6 @@
 #define OFF_MAX_DEPTH 20
 #define OFF_NNODES (HDR - 16)
 
-static void tmp_path(char *buf, size_t size, const char *name)
-{
-    snprintf(buf, size, "%s/%s", harness_tmpdir(), name);
-}
-
-/* The bytes of file PATH (*N of them); NULL when it cannot be read. */
-static unsigned char *read_file(const char *path, size_t *n)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    fseek(f, 0, SEEK_END);
-    long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *b = malloc(size > 0 ? (size_t)size : 1);
-    *n = b && size >= 0 ? fread(b, 1, (size_t)size, f) : 0;
-    fclose(f);
-    return b;
-}
-
 static void write_file(const char *path, const unsigned char *b, size_t n)
 {
     FILE *f = fopen(path, "wb");
@@ -146,7 +126,7 @@ TEST(kd_file_round_trip_is_the_built_tree)
     static const bsp_accel_kind kinds[] = {BSP_ACCEL_SAH, BSP_ACCEL_KAPLAN, BSP_ACCEL_SAH_PER,
                                            BSP_ACCEL_SAH_PAR, BSP_ACCEL_SAH_MIXED};
     char path[1024];
-    tmp_path(path, sizeof path, "round.kdt");
+    harness_tmp_path(path, sizeof path, "round.kdt");
     for (size_t sc = 0; sc < sizeof scenes / sizeof *scenes; sc++) {
         bsp_scene *s = kd_test_load(scenes[sc]);
         bsp_accel *naive = kd_test_build(s, BSP_ACCEL_NAIVE);
@@ -204,7 +184,7 @@ static unsigned char *small_tree_file(const bsp_scene *s, const char *path, size
     bsp_error err;
     REQUIRE(bsp_accel_save(a, path, &err) == BSP_OK);
     bsp_accel_destroy(a);
-    unsigned char *b = read_file(path, n);
+    unsigned char *b = harness_read_file(path, n);
     REQUIRE(b && *n > HDR + 4);
     return b;
 }
@@ -213,8 +193,8 @@ TEST(kd_file_refuses_foreign_truncated_and_flipped_files)
 {
     bsp_scene *s = kd_test_load("spd:jacks");
     char good[1024], bad[1024];
-    tmp_path(good, sizeof good, "jacks.kdt");
-    tmp_path(bad, sizeof bad, "bad.kdt");
+    harness_tmp_path(good, sizeof good, "jacks.kdt");
+    harness_tmp_path(bad, sizeof bad, "bad.kdt");
     size_t n;
     unsigned char *b = small_tree_file(s, good, &n);
 
@@ -235,7 +215,7 @@ TEST(kd_file_refuses_foreign_truncated_and_flipped_files)
     at[10] = '4';
     REQUIRE(bsp_scene_load_nff_memory(nff2, strlen(nff2), "moved.nff", &moved, &err) == BSP_OK);
     char onep[1024];
-    tmp_path(onep, sizeof onep, "one.kdt");
+    harness_tmp_path(onep, sizeof onep, "one.kdt");
     bsp_accel *a1 = kd_test_build(one, BSP_ACCEL_SAH);
     REQUIRE(bsp_accel_save(a1, onep, &err) == BSP_OK);
     bsp_accel_destroy(a1);
@@ -300,8 +280,8 @@ TEST(kd_file_refuses_broken_structure_under_a_matching_checksum)
 {
     bsp_scene *s = kd_test_load("spd:jacks");
     char good[1024], bad[1024];
-    tmp_path(good, sizeof good, "jacks2.kdt");
-    tmp_path(bad, sizeof bad, "bad2.kdt");
+    harness_tmp_path(good, sizeof good, "jacks2.kdt");
+    harness_tmp_path(bad, sizeof bad, "bad2.kdt");
     size_t n;
     unsigned char *b = small_tree_file(s, good, &n);
     uint32_t nnodes = get32(b + OFF_NNODES);
@@ -372,7 +352,7 @@ TEST(kd_file_refuses_broken_structure_under_a_matching_checksum)
     bsp_accel *a = kd_test_build(d, BSP_ACCEL_SAH);
     REQUIRE(bsp_accel_save(a, good, &err) == BSP_OK);
     bsp_accel_destroy(a);
-    b = read_file(good, &n);
+    b = harness_read_file(good, &n);
     REQUIRE(b);
     nnodes = get32(b + OFF_NNODES);
     REQUIRE(get32(b + OFF_NNODES + 8) >= 1);
@@ -389,7 +369,7 @@ TEST(kd_file_save_refuses_naive_and_unwritable_paths)
     bsp_scene *s = kd_test_load("spd:jacks");
     bsp_accel *naive = kd_test_build(s, BSP_ACCEL_NAIVE), *a = kd_test_build(s, BSP_ACCEL_SAH);
     char path[1024];
-    tmp_path(path, sizeof path, "naive.kdt");
+    harness_tmp_path(path, sizeof path, "naive.kdt");
     bsp_error err;
     CHECK(bsp_accel_save(naive, path, &err) == BSP_ERR_INVALID);
     CHECK_STR_CONTAINS(err.message, "naive");
@@ -401,7 +381,7 @@ TEST(kd_file_save_refuses_naive_and_unwritable_paths)
     CHECK(bsp_accel_save(a, nodir, &err) == BSP_ERR_IO);
     CHECK_STR_CONTAINS(err.message, nodir);
     /* over an existing file: replaced whole */
-    tmp_path(path, sizeof path, "over.kdt");
+    harness_tmp_path(path, sizeof path, "over.kdt");
     write_file(path, (const unsigned char *)"old contents", 12);
     CHECK(bsp_accel_save(a, path, &err) == BSP_OK);
     bsp_accel *l = NULL;
@@ -416,8 +396,8 @@ TEST(cli_build_and_tree_give_the_built_answers)
 {
     const char *cli = harness_cli();
     char tree[1024], rays[1024], cmd[4096];
-    tmp_path(tree, sizeof tree, "cli_teapot.kdt");
-    tmp_path(rays, sizeof rays, "cli_rays.txt");
+    harness_tmp_path(tree, sizeof tree, "cli_teapot.kdt");
+    harness_tmp_path(rays, sizeof rays, "cli_rays.txt");
     snprintf(cmd, sizeof cmd, "%s build spd:teapot -o %s --accel kaplan --check", cli, tree);
     int status;
     char *out = harness_run(cmd, &status);
@@ -465,9 +445,9 @@ TEST(cli_build_and_tree_give_the_built_answers)
     /* render through the loaded tree: the very image of the built one, and
      * its figures say the tree was loaded */
     char png_a[1024], png_b[1024], json[1024];
-    tmp_path(png_a, sizeof png_a, "cli_tree.ppm");
-    tmp_path(png_b, sizeof png_b, "cli_built.ppm");
-    tmp_path(json, sizeof json, "cli_tree.json");
+    harness_tmp_path(png_a, sizeof png_a, "cli_tree.ppm");
+    harness_tmp_path(png_b, sizeof png_b, "cli_built.ppm");
+    harness_tmp_path(json, sizeof json, "cli_tree.json");
     snprintf(cmd, sizeof cmd, "%s render spd:teapot --res 65 --tree %s -o %s --stats-json %s 2>&1",
              cli, tree, png_a, json);
     CHECK_RUN(cmd, 0, "wrote");
@@ -475,14 +455,14 @@ TEST(cli_build_and_tree_give_the_built_answers)
              png_b);
     CHECK_RUN(cmd, 0, "wrote");
     size_t na = 0, nb = 0;
-    unsigned char *ia = read_file(png_a, &na), *ib = read_file(png_b, &nb);
+    unsigned char *ia = harness_read_file(png_a, &na), *ib = harness_read_file(png_b, &nb);
     REQUIRE(ia && ib);
     CHECK_MSG(na == nb && na > 65 * 65 * 3 && memcmp(ia, ib, na) == 0,
               "render --tree: %zu bytes, built: %zu bytes, or they differ", na, nb);
     free(ia);
     free(ib);
     size_t nj = 0;
-    unsigned char *js = read_file(json, &nj);
+    unsigned char *js = harness_read_file(json, &nj);
     REQUIRE(js);
     js[nj - 1] = '\0';
     CHECK_STR_CONTAINS((const char *)js, "\"tree_file\": ");

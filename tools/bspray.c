@@ -186,10 +186,7 @@ static void print_stats_table(FILE *f, const char *scene_name, const char *accel
         fprintf(f, "| tree bytes | %" PRIu64 " |\n", tree->bytes);
         fprintf(f, "| trace copy bytes | %" PRIu64 " |\n", tree->trace_bytes);
     }
-    if (tree_path)
-        fprintf(f, "| tree file | %s |\n| T_load[s] | %.3f |\n", tree_path, st->build_seconds);
-    else
-        fprintf(f, "| T_B[s] | %.3f |\n", st->build_seconds);
+    tree_time_row(f, tree_path, st->build_seconds, 3);
     fprintf(f, "| T_TR[s] | %.3f |\n", st->render_seconds);
     fprintf(f, "| Mrays/s | %.3f |\n", safe_div((double)all, st->render_seconds) * 1e-6);
 }
@@ -248,13 +245,7 @@ static int write_stats_json(const char *path, const char *scene_name, const char
             ",\n  \"trace_bytes\": %" PRIu64 ",\n",
             tree->interior_nodes, tree->leaves, tree->empty_leaves, tree->references,
             tree->bytes, tree->trace_bytes);
-    if (tree_path) {
-        fprintf(f, "  \"tree_file\": ");
-        json_string(f, tree_path);
-        fprintf(f, ",\n  \"T_load\": %.6f,\n", st->build_seconds);
-    } else {
-        fprintf(f, "  \"T_B\": %.6f,\n", st->build_seconds);
-    }
+    tree_time_json(f, tree_path, st->build_seconds);
     fprintf(f, "  \"T_TR\": %.6f,\n", st->render_seconds);
     if (chk->ran)
         fprintf(f,

@@ -473,6 +473,25 @@ bsp_accel *tree_or_build(const args *a, const bsp_scene *scene, const bsp_build_
     return accel;
 }
 
+void tree_time_row(FILE *f, const char *tree_path, double seconds, int digits)
+{
+    if (tree_path)
+        fprintf(f, "| tree file | %s |\n| T_load[s] | %.*f |\n", tree_path, digits, seconds);
+    else
+        fprintf(f, "| T_B[s] | %.*f |\n", digits, seconds);
+}
+
+void tree_time_json(FILE *f, const char *tree_path, double seconds)
+{
+    if (tree_path) {
+        fprintf(f, "  \"tree_file\": ");
+        json_string(f, tree_path);
+        fprintf(f, ",\n  \"T_load\": %.6f,\n", seconds);
+    } else {
+        fprintf(f, "  \"T_B\": %.6f,\n", seconds);
+    }
+}
+
 const char view_args_help[] =
     "  --eye, --at, --up X,Y,Z   override the camera (any of them; for meshes, the rest\n"
     "                     of the default view adapts); --dir X,Y,Z: look along X,Y,Z\n"

@@ -104,6 +104,11 @@ bsp_accel *build_accel(const bsp_scene *scene, const bsp_build_options *opts);
 extern const char tree_arg_help[];
 bsp_accel *tree_or_build(const args *a, const bsp_scene *scene, const bsp_build_options *opts,
                          const char *tree_path);
+/* The structure's time as a Markdown row (DIGITS decimals) and as a JSON
+ * member line (followed by a comma): T_B of a build, or, when TREE_PATH (the
+ * --tree file) is not NULL, that file and T_load. */
+void tree_time_row(FILE *f, const char *tree_path, double seconds, int digits);
+void tree_time_json(FILE *f, const char *tree_path, double seconds);
 /* Seconds on a monotonic clock. */
 double now_seconds(void);
 /* A / B, or 0 when B is not positive (a per-ray figure of no rays). */

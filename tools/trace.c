@@ -223,11 +223,7 @@ static void print_stats(FILE *f, const char *scene, const trace_run *r, const bs
             "| N_IN / N_V / N_EV / N_OIV | %" PRIu64 " / %" PRIu64 " / %" PRIu64 " / %" PRIu64
             " |\n",
             t->interior_nodes, t->leaves, t->empty_leaves, t->references);
-    if (r->tree_path)
-        fprintf(f, "| tree file | %s |\n| T_load[s] | %.4f |\n", r->tree_path,
-                bsp_accel_build_seconds(r->accel));
-    else
-        fprintf(f, "| T_B[s] | %.4f |\n", bsp_accel_build_seconds(r->accel));
+    tree_time_row(f, r->tree_path, bsp_accel_build_seconds(r->accel), 4);
     fprintf(f, "| T_TR[s] | %.4f |\n", r->seconds);
     fprintf(f, "| threads | %d |\n", r->threads);
     fprintf(f, "| Mrays/s | %.3f |\n", r->seconds > 0 ? (double)c->rays / r->seconds * 1e-6 : 0.0);
@@ -263,13 +259,7 @@ static int write_json(const char *path, const char *scene, const trace_run *r,
             "  \"N_IN\": %" PRIu64 ",\n  \"N_V\": %" PRIu64 ",\n  \"N_EV\": %" PRIu64
             ",\n  \"N_OIV\": %" PRIu64 ",\n",
             t->interior_nodes, t->leaves, t->empty_leaves, t->references);
-    if (r->tree_path) {
-        fprintf(f, "  \"tree_file\": ");
-        json_string(f, r->tree_path);
-        fprintf(f, ",\n  \"T_load\": %.6f,\n", bsp_accel_build_seconds(r->accel));
-    } else {
-        fprintf(f, "  \"T_B\": %.6f,\n", bsp_accel_build_seconds(r->accel));
-    }
+    tree_time_json(f, r->tree_path, bsp_accel_build_seconds(r->accel));
     fprintf(f, "  \"T_TR\": %.6f\n}\n", r->seconds);
     if (fclose(f) != 0) {
         fprintf(stderr, "%s: %s: write failed: %s\n", prog, path, strerror(errno));

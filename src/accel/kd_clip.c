@@ -42,29 +42,6 @@ void kd_clip_scratch_free(kd_clip_scratch *scr)
     }
 }
 
-/* The bounds of the points V[0..N) (box_add_point in order, so the same bits
- * wherever they are taken). */
-static bsp_box points_box(const bsp_vec3 *v, size_t n)
-{
-    bsp_box b = box_empty();
-    for (size_t i = 0; i < n; i++)
-        b = box_add_point(b, v[i]);
-    return b;
-}
-
-static inline __attribute__((always_inline)) void add_point(double lo[3], double hi[3], double x,
-                                                            double y, double z);
-
-/* The same bounds as points_box, into LO and HI (add_point is box_add_point's
- * comparisons). */
-static void points_bounds(const bsp_vec3 *v, size_t n, double lo[3], double hi[3])
-{
-    lo[0] = lo[1] = lo[2] = INFINITY;
-    hi[0] = hi[1] = hi[2] = -INFINITY;
-    for (size_t i = 0; i < n; i++)
-        add_point(lo, hi, v[i].x, v[i].y, v[i].z);
-}
-
 /* Clips the closed polygon IN[0..N) to x[k] >= c (ABOVE) or x[k] <= c;
  * writes at most 2N vertices to OUT and returns their count. Coordinates are
  * kept in locals and written whole (writing one component of a vertex just
@@ -122,6 +99,24 @@ static inline __attribute__((always_inline)) void add_point(double lo[3], double
     hi[0] = hi[0] > x ? hi[0] : x;
     hi[1] = hi[1] > y ? hi[1] : y;
     hi[2] = hi[2] > z ? hi[2] : z;
+}
+
+/* The bounds of the points V[0..N) into LO and HI (add_point, in order: the
+ * comparisons of box_add_point, so the same bits wherever they are taken). */
+static void points_bounds(const bsp_vec3 *v, size_t n, double lo[3], double hi[3])
+{
+    lo[0] = lo[1] = lo[2] = INFINITY;
+    hi[0] = hi[1] = hi[2] = -INFINITY;
+    for (size_t i = 0; i < n; i++)
+        add_point(lo, hi, v[i].x, v[i].y, v[i].z);
+}
+
+/* The same bounds as a box. */
+static bsp_box points_box(const bsp_vec3 *v, size_t n)
+{
+    double lo[3], hi[3];
+    points_bounds(v, n, lo, hi);
+    return (bsp_box){bsp_v3(lo[0], lo[1], lo[2]), bsp_v3(hi[0], hi[1], hi[2])};
 }
 
 /* One edge A-B of clip_plane_k's loop for one side (DA, DB: the signed
