@@ -29,14 +29,29 @@ const char *harness_shared_dir(void);
 /* Path of the CLI binary under test (BSPRAY_CLI, default build/bspray). */
 const char *harness_cli(void);
 
-/* A uniform double in [0, 1) from the xorshift64* state *S (seeded by the
- * test, so failures reproduce). */
-static inline double harness_rnd(unsigned long long *s)
+/* One xorshift64* step of the state *S (seeded by the test, so failures
+ * reproduce): its 64-bit output, a uniform double in [0, 1) from its top 53
+ * bits, and its top 32 bits. */
+static inline unsigned long long harness_xorshift64star(unsigned long long *s)
 {
     *s ^= *s >> 12;
     *s ^= *s << 25;
     *s ^= *s >> 27;
-    return (double)((*s * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+    return *s * 2685821657736338717ULL;
+}
+static inline double harness_rnd(unsigned long long *s)
+{
+    return (double)(harness_xorshift64star(s) >> 11) * (1.0 / 9007199254740992.0);
+}
+static inline uint32_t harness_rnd_u32(unsigned long long *s)
+{
+    return (uint32_t)(harness_xorshift64star(s) >> 32);
+}
+/* Whether BSPRAY_TEST_QUICK asks for less work (the sanitizer run). */
+static inline int harness_quick(void)
+{
+    const char *q = getenv("BSPRAY_TEST_QUICK");
+    return q && *q && *q != '0';
 }
 /* Marsaglia's xorshift64 step (13, 7, 17) of the state *S, and a uniform
  * double in [0, 1) from it: the generator of the older tests, kept so that

@@ -19,13 +19,10 @@
 #include "accel/kd_prune.h"
 #include "harness.h"
 
-static uint64_t rng;
+static unsigned long long rng;
 static uint32_t next_u32(void)
 {
-    rng ^= rng >> 12;
-    rng ^= rng << 25;
-    rng ^= rng >> 27;
-    return (uint32_t)((rng * 2685821657736338717ULL) >> 32);
+    return harness_rnd_u32(&rng);
 }
 
 enum { PRIMS = 40 };

@@ -41,19 +41,10 @@
 
 static int ray_count(int full);
 
-static int quick(void)
-{
-    const char *q = getenv("BSPRAY_TEST_QUICK");
-    return q && *q && *q != '0';
-}
-
-static uint64_t rng_state;
+static unsigned long long rng_state;
 static double rnd(void)
 {
-    rng_state ^= rng_state >> 12;
-    rng_state ^= rng_state << 25;
-    rng_state ^= rng_state >> 27;
-    return (double)((rng_state * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+    return harness_rnd(&rng_state);
 }
 static double rnd_in(double lo, double hi)
 {
@@ -847,7 +838,7 @@ static void check_exact_opts(const bsp_scene *s, const char *name, bsp_build_opt
 
 static int ray_count(int full)
 {
-    return quick() ? full / 10 : full;
+    return harness_quick() ? full / 10 : full;
 }
 
 static void check_exact(const bsp_scene *s, const char *name, uint64_t seed)
@@ -1193,7 +1184,7 @@ TEST(sah_clip_is_conservative_and_tight)
     rng_state = 501;
     kd_clip_scratch scr;
     memset(&scr, 0, sizeof scr);
-    int nonempty = 0, trials = quick() ? 60 : 300;
+    int nonempty = 0, trials = harness_quick() ? 60 : 300;
     for (int trial = 0; trial < trials; trial++) {
         bsp_scene *s = bsp_scene_create();
         bsp_vec3 v[3];
@@ -1288,7 +1279,7 @@ static bsp_vec3 cone_point(bsp_vec3 base, double rb, bsp_vec3 apex, double ra, d
 TEST(sah_clip_cones_is_conservative_and_tight)
 {
     rng_state = 777;
-    int trials = quick() ? 100 : 400, met = 0;
+    int trials = harness_quick() ? 100 : 400, met = 0;
     for (int trial = 0; trial < trials; trial++) {
         bsp_scene *s = bsp_scene_create();
         bsp_error err;
@@ -1429,7 +1420,7 @@ static bsp_vec3 add_random_triangle(bsp_scene *s, int trial)
 TEST(sah_split_clip_matches_clipping_each_child)
 {
     rng_state = 733;
-    int trials = quick() ? 300 : 2000, both = 0;
+    int trials = harness_quick() ? 300 : 2000, both = 0;
     for (int trial = 0; trial < trials; trial++) {
         bsp_scene *s = bsp_scene_create();
         const bsp_vec3 v0 = add_random_triangle(s, trial);
@@ -1527,7 +1518,7 @@ static int inside_planar_polygon(const double *r, const double *th, size_t n, do
 TEST(sah_parts_match_clipping_afresh)
 {
     rng_state = 919;
-    int trials = quick() ? 150 : 900, used = 0, splits = 0, sampled = 0;
+    int trials = harness_quick() ? 150 : 900, used = 0, splits = 0, sampled = 0;
     kd_clip_scratch scr = {{NULL, NULL}, {0, 0}};
     for (int trial = 0; trial < trials; trial++) {
         bsp_scene *s = bsp_scene_create();
@@ -1700,7 +1691,7 @@ TEST(sah_mailbox_off_builds_the_mailbox_terms_tree)
 
 TEST(sah_calibration_gives_sane_costs)
 {
-    if (quick())
+    if (harness_quick())
         harness_skip("calibration timing is meaningless under sanitizers");
     bsp_sah_costs c;
     bsp_error err;
@@ -1754,7 +1745,7 @@ TEST(sah_scaling_report)
     const char *specs[] = {"spd:balls:4", "spd:balls:5", "spd:balls:6",
                            "soup:10000",  "soup:100000", "soup:1000000"};
     for (size_t i = 0; i < sizeof specs / sizeof specs[0]; i++) {
-        if (quick() && i % 3 != 0)
+        if (harness_quick() && i % 3 != 0)
             continue;
         bsp_scene *s = NULL;
         bsp_error err;
@@ -1857,7 +1848,7 @@ TEST(sah_small_sweep_matches_the_sweep_of_runs)
     static uint64_t ev[3 * 2 * MAXN];
     static double cost[MAXN];
     rng_state = 777;
-    int nodes = quick() ? 3000 : 30000, mismatches = 0, found = 0, bonus_wins = 0;
+    int nodes = harness_quick() ? 3000 : 30000, mismatches = 0, found = 0, bonus_wins = 0;
     int below_floor = 0;
     double least_ratio = INFINITY;
     char first[256] = "";

@@ -23,19 +23,10 @@
 #include "geom/vec.h"
 #include "harness.h"
 
-static int quick(void)
-{
-    const char *q = getenv("BSPRAY_TEST_QUICK");
-    return q && *q && *q != '0';
-}
-
-static uint64_t rng;
+static unsigned long long rng;
 static double rnd(void)
 {
-    rng ^= rng >> 12;
-    rng ^= rng << 25;
-    rng ^= rng >> 27;
-    return (double)((rng * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+    return harness_rnd(&rng);
 }
 static double rnd_in(double lo, double hi)
 {
@@ -126,7 +117,7 @@ static int same_hit(int f1, const bsp_hit *a, int f2, const bsp_hit *b)
  * suite (make test) checks every rule x mailbox setting everywhere. */
 static int quick_skips_view_variant(const bsp_scene *scene, int kind, int mailbox)
 {
-    return quick() && !mailbox && kind >= BSP_ACCEL_SAH_PER &&
+    return harness_quick() && !mailbox && kind >= BSP_ACCEL_SAH_PER &&
            bsp_scene_prim_count(scene) > 2000;
 }
 
@@ -303,7 +294,7 @@ static void check_spd_file(const char *file, uint64_t seed)
     bsp_scene *s = NULL;
     bsp_error err;
     REQUIRE(bsp_scene_load(path, &s, &err) == BSP_OK);
-    check_scene(s, file, quick() ? 10000 : 100000, seed);
+    check_scene(s, file, harness_quick() ? 10000 : 100000, seed);
     bsp_scene_destroy(s);
 }
 
@@ -346,7 +337,7 @@ TEST(kd_exact_stanford_dragon)
     CHECK_MSG(st == BSP_OK, "%s", err.message);
     REQUIRE(st == BSP_OK);
     CHECK_EQ_INT(bsp_scene_prim_count(s), 11102);
-    check_scene(s, "dragon_vrip_res4", quick() ? 5000 : 30000, 15);
+    check_scene(s, "dragon_vrip_res4", harness_quick() ? 5000 : 30000, 15);
     bsp_scene_destroy(s);
 }
 
@@ -359,7 +350,7 @@ TEST(kd_exact_generated_spd)
         bsp_scene *s = NULL;
         bsp_error err;
         REQUIRE(bsp_scene_load(specs[i], &s, &err) == BSP_OK);
-        check_scene(s, specs[i], quick() ? 3000 : 20000, 100 + i);
+        check_scene(s, specs[i], harness_quick() ? 3000 : 20000, 100 + i);
         bsp_scene_destroy(s);
     }
 }
@@ -411,7 +402,7 @@ TEST(kd_exact_stress_primitives_in_split_planes)
     /* duplicates of one square: ties at equal t */
     for (int d = 0; d < 3; d++)
         add_quad(s, bsp_v3(8, 0, 0), bsp_v3(8, 16, 0), bsp_v3(8, 16, 16), bsp_v3(8, 0, 16));
-    check_scene(s, "squares in planes", quick() ? 5000 : 50000, 7);
+    check_scene(s, "squares in planes", harness_quick() ? 5000 : 50000, 7);
     bsp_scene_destroy(s);
 }
 
@@ -445,7 +436,7 @@ TEST(kd_exact_stress_axis_aligned_tubes)
         for (int j = 0; j <= 4; j++)
             for (int k = 0; k <= 4; k += 2)
                 add_sphere(s, bsp_v3(i, j, k), rnd_in(0.1, 0.3));
-    check_scene(s, "axis-aligned tubes", quick() ? 5000 : 50000, 11);
+    check_scene(s, "axis-aligned tubes", harness_quick() ? 5000 : 50000, 11);
     bsp_scene_destroy(s);
 }
 
@@ -462,7 +453,7 @@ TEST(kd_exact_stress_long_thin_triangles)
     for (int i = 0; i < 300; i++)
         add_sphere(s, bsp_v3(rnd_in(-45, 45), rnd_in(-45, 45), rnd_in(-45, 45)),
                    rnd_in(0.2, 3));
-    check_scene(s, "long thin triangles", quick() ? 5000 : 50000, 8);
+    check_scene(s, "long thin triangles", harness_quick() ? 5000 : 50000, 8);
     bsp_scene_destroy(s);
 }
 
@@ -484,7 +475,7 @@ TEST(kd_exact_stress_cluster_in_huge_shell)
         bsp_vec3 a = v3_add(b, bsp_v3(rnd_in(-0.3, 0.3), rnd_in(-0.3, 0.3), rnd_in(-0.3, 0.3)));
         REQUIRE(bsp_scene_add_cone(s, b, rnd_in(0.01, 0.05), a, rnd_in(0, 0.05), &err) == BSP_OK);
     }
-    check_scene(s, "cluster in huge shell", quick() ? 5000 : 50000, 9);
+    check_scene(s, "cluster in huge shell", harness_quick() ? 5000 : 50000, 9);
     bsp_scene_destroy(s);
 }
 
@@ -503,7 +494,7 @@ TEST(kd_exact_stress_far_from_origin)
         add_tri(s, c, a, b);
         REQUIRE(bsp_scene_add_cone(s, a, 0.2, b, 0.1, &err) == BSP_OK);
     }
-    check_scene(s, "far from origin", quick() ? 5000 : 50000, 10);
+    check_scene(s, "far from origin", harness_quick() ? 5000 : 50000, 10);
     bsp_scene_destroy(s);
 }
 
@@ -537,7 +528,7 @@ TEST(kd_exact_stress_duplicates_and_degenerates)
             comb[n++] = bsp_v3(x - 1.5, 6, 0);
     }
     REQUIRE(bsp_scene_add_polygon(s, comb, (size_t)n, &err) == BSP_OK);
-    check_scene(s, "duplicates and degenerates", quick() ? 5000 : 50000, 11);
+    check_scene(s, "duplicates and degenerates", harness_quick() ? 5000 : 50000, 11);
     bsp_scene_destroy(s);
 }
 
@@ -1193,12 +1184,12 @@ static void check_render(const char *spec, int res)
  * sanitizer run (BSPRAY_TEST_QUICK) uses 65 x 65. */
 TEST(kd_exact_every_ray_of_balls_render)
 {
-    check_render("spd:balls", quick() ? 65 : 513);
+    check_render("spd:balls", harness_quick() ? 65 : 513);
 }
 
 TEST(kd_exact_every_ray_of_tree_render)
 {
-    check_render("spd:tree", quick() ? 65 : 513);
+    check_render("spd:tree", harness_quick() ? 65 : 513);
 }
 
 /* FNV-1a over the little-endian bytes of the 32-bit words W[0..N), as the

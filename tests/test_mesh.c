@@ -34,36 +34,6 @@
 
 /* --- helpers ------------------------------------------------------------------ */
 
-/* The whole file, NUL-terminated; NULL if it cannot be read. Free with free(). */
-static char *slurp(const char *path, size_t *len)
-{
-    FILE *fp = fopen(path, "rb");
-    if (!fp)
-        return NULL;
-    size_t cap = 4096, n = 0, got;
-    char *buf = malloc(cap);
-    while (buf && (got = fread(buf + n, 1, cap - n - 1, fp)) > 0) {
-        n += got;
-        if (cap - n - 1 == 0) {
-            char *nb = realloc(buf, cap * 2);
-            if (!nb) {
-                free(buf);
-                buf = NULL;
-                break;
-            }
-            buf = nb;
-            cap *= 2;
-        }
-    }
-    fclose(fp);
-    if (buf) {
-        buf[n] = '\0';
-        if (len)
-            *len = n;
-    }
-    return buf;
-}
-
 static int write_file(const char *path, const void *buf, size_t len)
 {
     FILE *fp = fopen(path, "wb");
@@ -707,7 +677,7 @@ TEST(mesh_gzip_input_loads_as_the_plain_file)
 
     /* the compressed bytes in memory */
     size_t zlen = 0;
-    char *z = slurp(path, &zlen);
+    char *z = (char *)harness_read_file(path, &zlen);
     REQUIRE(z && zlen > 20);
     s = load_mem_ok(ply_load_memory, z, zlen, "gz in memory");
     check_same_prims(ref, s, "ply.gz in memory");
@@ -1055,7 +1025,7 @@ static void check_bad_file(const char *file, const char *path, mem_loader mem, b
         bsp_scene_destroy(out);
 
     size_t len = 0;
-    char *text = slurp(path, &len);
+    char *text = (char *)harness_read_file(path, &len);
     CHECK_MSG(text != NULL, "cannot read %s", path);
     if (!text)
         return;
@@ -1191,7 +1161,7 @@ TEST(mesh_every_prefix_fails_cleanly)
                            PLY_DIR "/alias_crlf.ply"};
     for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
         size_t len = 0;
-        char *text = slurp(files[i], &len);
+        char *text = (char *)harness_read_file(files[i], &len);
         REQUIRE(text != NULL);
         check_prefixes(strstr(files[i], ".obj") ? obj_load_memory : ply_load_memory, text, len);
         free(text);

@@ -27,36 +27,6 @@
 
 /* --- helpers ------------------------------------------------------------------ */
 
-/* The whole file, NUL-terminated; NULL if it cannot be read. Free with free(). */
-static char *slurp(const char *path, size_t *len)
-{
-    FILE *fp = fopen(path, "rb");
-    if (!fp)
-        return NULL;
-    size_t cap = 4096, n = 0, got;
-    char *buf = malloc(cap);
-    while (buf && (got = fread(buf + n, 1, cap - n - 1, fp)) > 0) {
-        n += got;
-        if (cap - n - 1 == 0) {
-            char *nb = realloc(buf, cap * 2);
-            if (!nb) {
-                free(buf);
-                buf = NULL;
-                break;
-            }
-            buf = nb;
-            cap *= 2;
-        }
-    }
-    fclose(fp);
-    if (buf) {
-        buf[n] = '\0';
-        if (len)
-            *len = n;
-    }
-    return buf;
-}
-
 /* Loads PATH, which must succeed (the test ends otherwise). */
 static bsp_scene *load_ok(const char *path)
 {
@@ -309,7 +279,7 @@ TEST(nff_spd_scenes_match_manifest)
     char dir[1024], path[1400];
     snprintf(dir, sizeof dir, "%s/scenes/spd", shared);
     snprintf(path, sizeof path, "%s/MANIFEST.md", dir);
-    char *md = slurp(path, NULL);
+    char *md = (char *)harness_read_file(path, &(size_t){0});
     REQUIRE(md != NULL);
 
     const char *sum = strstr(md, "## Summary");
@@ -407,7 +377,7 @@ TEST(nff_spd_scenes_match_manifest)
 static void check_input_forms(const char *path, const char *tag)
 {
     size_t len = 0;
-    char *text = slurp(path, &len);
+    char *text = (char *)harness_read_file(path, &len);
     REQUIRE(text != NULL);
     bsp_scene *ref = load_ok(path);
 
@@ -423,7 +393,7 @@ static void check_input_forms(const char *path, const char *tag)
     bsp_scene_destroy(zf);
 
     size_t zlen = 0;
-    char *zbuf = slurp(gz, &zlen);
+    char *zbuf = (char *)harness_read_file(gz, &zlen);
     REQUIRE(zbuf != NULL);
     CHECK(zlen >= 2 && (unsigned char)zbuf[0] == 0x1f && (unsigned char)zbuf[1] == 0x8b);
     bsp_scene *zm = load_mem_ok(zbuf, zlen, path); /* no .gz in the name: magic bytes */
@@ -911,7 +881,7 @@ TEST(nff_bad_corpus)
             bsp_scene_destroy(out);
 
         size_t len = 0;
-        char *buf = slurp(path, &len);
+        char *buf = (char *)harness_read_file(path, &len);
         CHECK_MSG(buf != NULL, "cannot read %s", path);
         if (!buf)
             continue;
@@ -947,7 +917,7 @@ TEST(nff_bad_corpus)
 TEST(nff_every_prefix_fails_cleanly)
 {
     size_t len = 0;
-    char *text = slurp(GOOD_DIR "/order.nff", &len);
+    char *text = (char *)harness_read_file(GOOD_DIR "/order.nff", &len);
     REQUIRE(text != NULL);
     for (size_t n = 0; n <= len; n++) {
         bsp_scene *out = NULL;

@@ -16,14 +16,11 @@
 #include "geom/vec.h"
 #include "harness.h"
 
-static uint64_t rng_state = 0x9e3779b97f4a7c15ULL;
+static unsigned long long rng_state = 0x9e3779b97f4a7c15ULL;
 
 static double urand(void)
 {
-    rng_state ^= rng_state >> 12;
-    rng_state ^= rng_state << 25;
-    rng_state ^= rng_state >> 27;
-    return (double)((rng_state * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+    return harness_rnd(&rng_state);
 }
 
 static uint32_t irand(uint32_t n)

@@ -14,13 +14,10 @@
 #include "harness.h"
 
 /* xorshift64*: a fixed-seed generator, so failures reproduce. */
-static uint64_t rng_state;
+static unsigned long long rng_state;
 static double rnd(void)
 {
-    rng_state ^= rng_state >> 12;
-    rng_state ^= rng_state << 25;
-    rng_state ^= rng_state >> 27;
-    return (double)((rng_state * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+    return harness_rnd(&rng_state);
 }
 static double rnd_range(double lo, double hi)
 {
