@@ -604,6 +604,69 @@ TEST(spd_tessellated_counts)
     CHECK_EQ_INT(tess_sphere_tris(64), 64 * 62);
 }
 
+/* spd_count, the pass that sizes a tessellated scene before it is made,
+ * counts what the generator then makes: the built scene's primitives. */
+TEST(spd_count_predicts_the_scene)
+{
+    static const struct {
+        const char *spec;
+        spd_generator gen;
+        int size, level; /* level 0: untessellated */
+    } table[] = {
+        {"spd:balls:2:t8", spd_gen_balls, 2, 8},       {"spd:balls:3", spd_gen_balls, 3, 0},
+        {"spd:tree:4:t6", spd_gen_tree, 4, 6},         {"spd:rings:2:t5", spd_gen_rings, 2, 5},
+        {"spd:lattice:2:t3", spd_gen_lattice, 2, 3},   {"spd:jacks:2:t7", spd_gen_jacks, 2, 7},
+        {"spd:sample:t5", spd_gen_sample, 1, 5},       {"spd:shells:1:t4", spd_gen_shells, 1, 4},
+        {"spd:gears:1:t8", spd_gen_gears, 1, 8},       {"spd:teapot:2:t4", spd_gen_teapot, 2, 4},
+        {"spd:mount:2", spd_gen_mount, 2, 0},          {"spd:nurbtst:t2", spd_gen_nurbtst, 1, 2},
+    };
+    for (size_t i = 0; i < sizeof table / sizeof table[0]; i++) {
+        spd_tess t;
+        REQUIRE(!table[i].level || spd_tess_init(&t, table[i].level));
+        size_t counted = spd_count(table[i].gen, table[i].size, table[i].level ? &t : NULL);
+        bsp_scene *s = build(table[i].spec);
+        if (!s)
+            continue;
+        CHECK_MSG(counted == bsp_scene_prim_count(s), "%s: counted %zu, made %zu",
+                  table[i].spec, counted, bsp_scene_prim_count(s));
+        bsp_scene_destroy(s);
+    }
+}
+
+/* A tessellated scene of more than SPD_MAX_PRIMS primitives is refused before
+ * anything is made (rings:100:t8 would be about a billion triangles, far
+ * more than this machine's memory), by the scene and by the NFF writer. */
+TEST(spd_tessellated_scene_too_large)
+{
+    static const char *const specs[] = {"spd:rings:100:t8", "spd:balls:8:t64",
+                                        "spd:balls:7:t8", "spd:lattice:290:t2"};
+    for (size_t i = 0; i < sizeof specs / sizeof specs[0]; i++) {
+        bsp_scene *s = (bsp_scene *)&s; /* must be reset to NULL */
+        bsp_error err = {0};
+        bsp_status st = spd_scene_generate_spec(specs[i], &s, &err);
+        CHECK_MSG(st == BSP_ERR_LIMIT, "%s: status %d", specs[i], (int)st);
+        CHECK(s == NULL);
+        CHECK_STR_CONTAINS(err.message, specs[i] + 4);
+        CHECK_STR_CONTAINS(err.message, "would make more than 100000000 primitives");
+    }
+    /* balls:7 has 5,380,840 spheres: 48 triangles each at level 8 */
+    spd_tess t;
+    REQUIRE(spd_tess_init(&t, 8));
+    CHECK(spd_count(spd_gen_balls, 7, &t) > SPD_MAX_PRIMS);
+    CHECK_EQ_INT(spd_count(spd_gen_balls, 6, &t), 48 * 597871 + 1);
+    /* the NFF writer refuses it too, and writes nothing */
+    char *text = NULL;
+    size_t len = 0;
+    FILE *mem = open_memstream(&text, &len);
+    REQUIRE(mem != NULL);
+    bsp_error err = {0};
+    CHECK(bsp_spd_write_nff("rings", 100, 8, mem, &err) == BSP_ERR_LIMIT);
+    fclose(mem);
+    CHECK_EQ_INT(len, 0);
+    CHECK_STR_CONTAINS(err.message, "spd:rings:100:t8: the tessellation would make more than");
+    free(text);
+}
+
 /* %g and back, as a reader of the NFF text sees a number. */
 static double g6(double x)
 {

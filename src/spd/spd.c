@@ -286,6 +286,106 @@ static void sc_patch(spd_sink *s, const bsp_vec3 *v, const bsp_vec3 *nrm, int n)
     scene_check(s, bsp_scene_add_patch(c->scene, r, rn, (size_t)n, c->err));
 }
 
+/* --- the counting sink: a tessellated scene's size before it is made ---------- */
+
+typedef struct count_ctx {
+    const spd_tess *tess;
+    size_t n;
+} count_ctx;
+
+/* The count so far plus K; past SPD_MAX_PRIMS the generator is stopped. */
+static void count_add(spd_sink *s, size_t k)
+{
+    count_ctx *c = s->ctx;
+    c->n += k;
+    if (c->n > SPD_MAX_PRIMS)
+        spd_fail(s, BSP_ERR_LIMIT, "too many primitives");
+}
+
+static void ct_background(spd_sink *s, const double rgb[3])
+{
+    (void)s, (void)rgb;
+}
+
+static void ct_view(spd_sink *s, bsp_vec3 from, bsp_vec3 at, bsp_vec3 up, double angle,
+                    double hither, int resx, int resy)
+{
+    (void)s, (void)from, (void)at, (void)up, (void)angle, (void)hither, (void)resx, (void)resy;
+}
+
+static void ct_light(spd_sink *s, bsp_vec3 pos)
+{
+    (void)s, (void)pos;
+}
+
+static void ct_material(spd_sink *s, const double rgb[3], double kd, double ks, double shine,
+                        double t, double ior)
+{
+    (void)s, (void)rgb, (void)kd, (void)ks, (void)shine, (void)t, (void)ior;
+}
+
+static void ct_sphere(spd_sink *s, bsp_vec3 center, double radius)
+{
+    const spd_tess *t = ((count_ctx *)s->ctx)->tess;
+    count_add(s, t ? spd_tess_sphere_count(t, center, radius) : 1);
+}
+
+static void ct_cone(spd_sink *s, bsp_vec3 base, double rb, bsp_vec3 apex, double ra)
+{
+    const spd_tess *t = ((count_ctx *)s->ctx)->tess;
+    count_add(s, t ? spd_tess_cone_count(t, base, rb, apex, ra) : 1);
+}
+
+static void ct_polygon(spd_sink *s, const bsp_vec3 *v, int n)
+{
+    (void)v, (void)n;
+    count_add(s, 1);
+}
+
+static void ct_patch(spd_sink *s, const bsp_vec3 *v, const bsp_vec3 *nrm, int n)
+{
+    (void)v, (void)nrm, (void)n;
+    count_add(s, 1);
+}
+
+size_t spd_count(spd_generator gen, int size, const spd_tess *tess)
+{
+    count_ctx ctx = {tess, 0};
+    /* the sink does not tessellate: its sphere and cone count what the
+     * tessellation would make of them */
+    spd_sink sink = {.ctx = &ctx,
+                     .failed = BSP_OK,
+                     .gen_error = NULL,
+                     .tess = NULL,
+                     .background = ct_background,
+                     .view = ct_view,
+                     .light = ct_light,
+                     .material = ct_material,
+                     .sphere = ct_sphere,
+                     .cone = ct_cone,
+                     .polygon = ct_polygon,
+                     .patch = ct_patch};
+    gen(size, &sink);
+    return ctx.n;
+}
+
+/* Refuses a tessellated scene of more than SPD_MAX_PRIMS primitives, counted
+ * first (a second pass of the generator that stores nothing: cheap next to
+ * making the scene, and stopped as soon as the count passes the limit). */
+static bsp_status check_tess_size(const spd_entry *e, int size, const spd_tess *tess,
+                                  bsp_error *err)
+{
+    if (!tess || spd_count(e->gen, size, tess) <= SPD_MAX_PRIMS)
+        return BSP_OK;
+    spd_tess t = *tess;
+    return error_set(err, BSP_ERR_LIMIT, NULL, 0,
+                     "spd:%s:%d:t%d: the tessellation would make more than %u primitives "
+                     "(level %d makes %zu triangles of a sphere, %d of a cone): choose a "
+                     "smaller size or level",
+                     e->name, size, t.slices, SPD_MAX_PRIMS, t.slices,
+                     2 * (size_t)t.slices * (size_t)(t.bands - 1), 2 * t.slices);
+}
+
 /* Parses "tN" (or "TN") into T; returns 0 when TEXT is not that or N is
  * out of range. */
 static int parse_tess(const char *text, spd_tess *t)
@@ -336,6 +436,9 @@ bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error 
         }
     }
 
+    bsp_status big = check_tess_size(e, size, tp, err);
+    if (big != BSP_OK)
+        return big;
     bsp_scene *scene = bsp_scene_create();
     if (!scene)
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "spd:%s: out of memory", e->name);
@@ -452,6 +555,9 @@ bsp_status bsp_spd_write_nff(const char *name, int size, int tessellate, FILE *o
         snprintf(text, sizeof text, "t%d", tessellate);
         return bad_tess(err, e, text);
     }
+    bsp_status big = check_tess_size(e, size, tessellate ? &tess : NULL, err);
+    if (big != BSP_OK)
+        return big;
     spd_sink sink = {.ctx = out,
                      .failed = BSP_OK,
                      .gen_error = NULL,

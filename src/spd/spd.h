@@ -69,6 +69,19 @@ typedef struct spd_tess {
  * range. */
 SPD_HIDDEN int spd_tess_init(spd_tess *t, int level);
 
+/* How many primitives the tessellation T makes of a sphere or a cone: its
+ * triangles, or 1 when it passes the primitive on as it is. */
+SPD_HIDDEN size_t spd_tess_sphere_count(const spd_tess *t, bsp_vec3 c, double radius);
+SPD_HIDDEN size_t spd_tess_cone_count(const spd_tess *t, bsp_vec3 base, double base_r,
+                                      bsp_vec3 apex, double apex_r);
+
+/* The most primitives a generated scene may have: the size factors of the
+ * registry (spd.c) keep every untessellated scene under it, and a
+ * tessellated one is counted before it is made (spd_count) and refused
+ * above it, instead of filling the memory (rings:100:t8 would make about a
+ * billion triangles, 100+ GB). */
+#define SPD_MAX_PRIMS 100000000u
+
 /* --- the sink ------------------------------------------------------------ */
 
 /* Where a generator writes. FAILED is BSP_OK until the first error, then
@@ -193,6 +206,11 @@ SPD_HIDDEN void spd_polypatch_tx(spd_sink *s, int n, double (*v)[3], double (*nr
 /* --- the generators -------------------------------------------------------- */
 
 typedef void (*spd_generator)(int size, spd_sink *out);
+
+/* The primitives GEN at SIZE makes under the tessellation TESS (NULL: none),
+ * counted without making them; the count stops a little past
+ * SPD_MAX_PRIMS. */
+SPD_HIDDEN size_t spd_count(spd_generator gen, int size, const spd_tess *tess);
 
 SPD_HIDDEN void spd_gen_balls(int size, spd_sink *out);
 SPD_HIDDEN void spd_gen_tetra(int size, spd_sink *out);

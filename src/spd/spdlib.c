@@ -242,12 +242,20 @@ static void sphere_point(const spd_tess *t, bsp_vec3 c, double r, int j, int i, 
     *p = bsp_v3(c.x + r * n->x, c.y + r * n->y, c.z + r * n->z);
 }
 
+/* A sphere the tessellation passes on as it is (the scene drops or refuses
+ * it as usual). */
+static int sphere_untessellated(bsp_vec3 c, double radius)
+{
+    double r = fabs(radius);
+    return !(r > 0.0) || !isfinite(r) || !v3_finite(c);
+}
+
 static void tess_sphere(spd_sink *s, bsp_vec3 c, double radius)
 {
     const spd_tess *t = s->tess;
     double r = fabs(radius);
-    if (!(r > 0.0) || !isfinite(r) || !v3_finite(c)) {
-        s->sphere(s, c, radius); /* the scene drops or refuses it as usual */
+    if (sphere_untessellated(c, radius)) {
+        s->sphere(s, c, radius);
         return;
     }
     const int nsl = t->slices, m = t->bands;
@@ -298,19 +306,29 @@ static void cone_point(const cone_frame *f, bsp_vec3 center, double r, double cs
                 f->nd * d[2] + f->nw * f->w[2]);
 }
 
+/* A cone the tessellation passes on as it is (dropped or refused as usual);
+ * W: its unit axis, *H: the axis's length. */
+static int cone_untessellated(bsp_vec3 base, double base_r, bsp_vec3 apex, double apex_r,
+                              double w[3], double *h)
+{
+    double rb = fabs(base_r), ra = fabs(apex_r);
+    w[0] = apex.x - base.x;
+    w[1] = apex.y - base.y;
+    w[2] = apex.z - base.z;
+    *h = spd_normalize(w);
+    return !(*h > 0.0) || !isfinite(*h) || !isfinite(rb) || !isfinite(ra) ||
+           (rb == 0.0 && ra == 0.0) || !v3_finite(base) || !v3_finite(apex);
+}
+
 static void tess_cone(spd_sink *s, bsp_vec3 base, double base_r, bsp_vec3 apex,
                       double apex_r)
 {
     const spd_tess *t = s->tess;
     double rb = fabs(base_r), ra = fabs(apex_r);
     cone_frame f;
-    f.w[0] = apex.x - base.x;
-    f.w[1] = apex.y - base.y;
-    f.w[2] = apex.z - base.z;
-    double h = spd_normalize(f.w);
-    if (!(h > 0.0) || !isfinite(h) || !isfinite(rb) || !isfinite(ra) ||
-        (rb == 0.0 && ra == 0.0) || !v3_finite(base) || !v3_finite(apex)) {
-        s->cone(s, base, base_r, apex, apex_r); /* dropped or refused as usual */
+    double h;
+    if (cone_untessellated(base, base_r, apex, apex_r, f.w, &h)) {
+        s->cone(s, base, base_r, apex, apex_r);
         return;
     }
     /* U: perpendicular to W and to the world axis W is least aligned with */
@@ -355,6 +373,22 @@ static void tess_cone(spd_sink *s, bsp_vec3 base, double base_r, bsp_vec3 apex,
             tess_emit(s, v, n);
         }
     }
+}
+
+size_t spd_tess_sphere_count(const spd_tess *t, bsp_vec3 c, double radius)
+{
+    /* two fans of N triangles around the poles, two per quad between */
+    return sphere_untessellated(c, radius) ? 1 : 2 * (size_t)t->slices * (size_t)(t->bands - 1);
+}
+
+size_t spd_tess_cone_count(const spd_tess *t, bsp_vec3 base, double base_r, bsp_vec3 apex,
+                           double apex_r)
+{
+    double w[3], h;
+    if (cone_untessellated(base, base_r, apex, apex_r, w, &h))
+        return 1;
+    /* a pointed end makes each slice one triangle, else two */
+    return (base_r == 0.0 || apex_r == 0.0 ? 1 : 2) * (size_t)t->slices;
 }
 
 void spd_sphere(spd_sink *s, const double c[4])
