@@ -1017,3 +1017,40 @@ TEST(nff_spd_prefix_is_left_to_the_generators)
         CHECK(strstr(err.message, "cannot open") == NULL); /* not read as a file */
     }
 }
+
+/* 'f' numbers above NFF.TXT's ranges (colours 0 to 1, Kd and Ks usually at
+ * most 1, T a fraction) are read as given, with one warning per kind naming
+ * the first record's line and value; 1 itself is in range. */
+TEST(nff_material_ranges_warned)
+{
+    static const char text[] = "b 0 0 0\n"
+                               "f 1 1 1 1 1 10 1 1\n"          /* line 2: all at the limit */
+                               "s 0 0 0 1\n"
+                               "f 1.5 0.2 0.2 0.5 0.5 3 0 1\n" /* line 4: colour */
+                               "s 3 0 0 1\n"
+                               "f 0.2 0.2 2.5 0.5 0.5 3 0 1\n" /* line 6: colour again */
+                               "s 6 0 0 1\n"
+                               "f 0.5 0.5 0.5 0.5 4 3 0 1\n"   /* line 8: Ks */
+                               "s 9 0 0 1\n"
+                               "f 0.5 0.5 0.5 0.5 0.5 3 3e29 1.5\n" /* line 10: T */
+                               "s 12 0 0 1\n";
+    bsp_scene *s = load_mem_ok(text, sizeof text - 1, "ranges.nff");
+    CHECK_EQ_INT(bsp_scene_warning_count(s), 3);
+    const char *want[3] = {"ranges.nff:4: 2 'f' records with a colour component above 1",
+                           "ranges.nff:8: 1 'f' record with Kd or Ks above 1",
+                           "ranges.nff:10: 1 'f' record with a transmittance T above 1"};
+    const char *value[3] = {"the first has 1.5", "the first has 4", "the first has 3e+29"};
+    for (size_t i = 0; i < 3 && i < bsp_scene_warning_count(s); i++) {
+        CHECK_STR_CONTAINS(bsp_scene_warning(s, i), want[i]);
+        CHECK_STR_CONTAINS(bsp_scene_warning(s, i), value[i]);
+    }
+    /* read as given */
+    REQUIRE(bsp_scene_prim_count(s) == 5);
+    CHECK(bsp_scene_material(s, bsp_scene_prim_material(s, 4))->t == 3e29);
+    bsp_scene_destroy(s);
+
+    static const char in_range[] = "f 1 0 1 1 0 0 1 1\ns 0 0 0 1\nf 0 0 0 0 0 0 0 0\ns 3 0 0 1\n";
+    s = load_mem_ok(in_range, sizeof in_range - 1, "in_range.nff");
+    CHECK_EQ_INT(bsp_scene_warning_count(s), 0);
+    bsp_scene_destroy(s);
+}

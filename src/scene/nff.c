@@ -83,6 +83,14 @@ static const char *const keyword_name[] = {"",   "v",  "b",     "l",      "f",
                                            "c",  "s",  "p",     "pp",     "from",
                                            "at", "up", "angle", "hither", "resolution"};
 
+/* What NFF.TXT says of an 'f' record's numbers, beyond their signs (which
+ * the scene refuses): "RGB is in terms of 0.0 to 1.0"; "usually, 0 <= Kd
+ * <= 1 and 0 <= Ks <= 1"; T is a "fraction of contribution of the
+ * transmitting ray". Larger values are read as given, with a warning: a
+ * Whitted ray of depth 4 multiplies by Ks or T up to four times, so values
+ * far above 1 make pixels overflow to infinity (T = 3e29: found by fuzzing). */
+enum { RANGE_COLOUR, RANGE_KD_KS, RANGE_T, MATERIAL_RANGE_KINDS };
+
 typedef struct parser {
     const char *name; /* for messages */
     const char *p;    /* scan position: just after tok */
@@ -94,6 +102,10 @@ typedef struct parser {
     bsp_vec3 *vbuf; /* reusable vertex (and normal) buffer of polygons */
     size_t vcap;
     size_t v_line; /* line of the v block, 0 before it */
+    /* 'f' records outside the ranges NFF.TXT gives (warned once per kind at
+     * the end): how many, and the line and value of the first */
+    size_t out_of_range[MATERIAL_RANGE_KINDS], out_of_range_line[MATERIAL_RANGE_KINDS];
+    double out_of_range_value[MATERIAL_RANGE_KINDS];
 } parser;
 
 static int is_space(char c)
@@ -428,6 +440,34 @@ static bsp_status read_polygon(parser *P, keyword kw, size_t line)
     return bsp_scene_add_polygon(P->scene, verts, nv, P->err);
 }
 
+/* Counts an 'f' record whose largest number of KIND, V, is above 1. */
+static void note_range(parser *P, int kind, double v, size_t line)
+{
+    if (!(v > 1.0))
+        return;
+    if (P->out_of_range[kind]++ == 0) {
+        P->out_of_range_line[kind] = line;
+        P->out_of_range_value[kind] = v;
+    }
+}
+
+/* The warnings of note_range, once per kind. */
+static void warn_ranges(parser *P)
+{
+    static const char *const what[MATERIAL_RANGE_KINDS] = {
+        "a colour component above 1 (NFF colours run from 0 to 1)",
+        "Kd or Ks above 1 (usually 0 to 1): surfaces may reflect more light than reaches them",
+        "a transmittance T above 1 (T is the fraction of the transmitted ray's light): "
+        "pixels may overflow"};
+    for (int k = 0; k < MATERIAL_RANGE_KINDS; k++) {
+        size_t c = P->out_of_range[k];
+        if (c)
+            scene_warn(P->scene, "%s:%zu: %zu 'f' record%s with %s; the first has %g", P->name,
+                       P->out_of_range_line[k], c, c == 1 ? "" : "s", what[k],
+                       P->out_of_range_value[k]);
+    }
+}
+
 /* One record starting with the keyword token K (already consumed). */
 static bsp_status read_record(parser *P, const token *k)
 {
@@ -464,6 +504,9 @@ static bsp_status read_record(parser *P, const token *k)
         if ((st = read_numbers(P, "'f' record", k->line, 8, x, 8)) != BSP_OK)
             return st;
         bsp_material m = {{x[0], x[1], x[2]}, x[3], x[4], x[5], x[6], x[7]};
+        note_range(P, RANGE_COLOUR, fmax(x[0], fmax(x[1], x[2])), k->line);
+        note_range(P, RANGE_KD_KS, fmax(x[3], x[4]), k->line);
+        note_range(P, RANGE_T, x[6], k->line);
         return bsp_scene_set_material(P->scene, &m, P->err);
     }
     case KW_C:
@@ -524,6 +567,7 @@ static bsp_status parse_nff(const char *buf, size_t len, const char *name, bsp_s
         bsp_scene_destroy(P.scene);
         return st;
     }
+    warn_ranges(&P);
     scene_set_source(P.scene, name, 0);
     scene_finish(P.scene);
     scene_set_source(P.scene, NULL, 0); /* NAME is borrowed only for the call */
