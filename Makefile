@@ -8,6 +8,7 @@
 #                   (fewer random rays: BSPRAY_TEST_QUICK=1)
 #   make embree-compare  build/bspray-embree: primary-ray throughput against Intel Embree 3
 #                   on the same rays (needs libembree-dev; docs/embree.md). Not part of `all`.
+#   make fuzz       build-fuzz/fuzz_*: libFuzzer targets (needs clang; fuzz/run.sh runs them)
 #   make install    PREFIX=/usr/local (and DESTDIR for staging): both libraries, the
 #                   headers, the CLI and a pkg-config file (bspray.pc)
 #   make clean
@@ -56,7 +57,7 @@ CLI   := $(BUILD)/bspray
 TESTS := $(BUILD)/bspray_tests
 EMBREE_CLI := $(BUILD)/bspray-embree
 
-.PHONY: all run test asan-test clean embree-compare examples install shared
+.PHONY: all run test asan-test clean embree-compare examples install shared fuzz
 all: $(LIB) $(PUBLIC_LIB) $(BUILD)/libbspray.so $(CLI) $(EXAMPLES) $(EXAMPLES_SHARED)
 examples: $(EXAMPLES) $(EXAMPLES_SHARED)
 shared: $(BUILD)/libbspray.so
@@ -133,6 +134,22 @@ asan-test:
 	BSPRAY_TEST_QUICK=1 $(MAKE) BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer" \
 	    SAN="-fsanitize=address,undefined -fno-sanitize-recover=all" test
 
+# Fuzz targets (fuzz/, libFuzzer: needs clang): the library built again with
+# the sanitizers and libFuzzer's coverage, and one program per target.
+# fuzz/run.sh makes a seed corpus and runs them (docs/fuzzing.md).
+FUZZ_BUILD   := build-fuzz
+FUZZ_SAN     := -fsanitize=address,undefined -fno-sanitize-recover=all
+FUZZ_TARGETS := $(patsubst fuzz/%.c,$(FUZZ_BUILD)/%,$(sort $(wildcard fuzz/fuzz_*.c)))
+
+fuzz:
+	$(MAKE) BUILD=$(FUZZ_BUILD) CC=clang OPT="-O1 -g" SAN="$(FUZZ_SAN) -fsanitize=fuzzer-no-link" \
+	    $(FUZZ_BUILD)/libbspray.a
+	$(MAKE) CC=clang $(FUZZ_TARGETS)
+
+$(FUZZ_BUILD)/fuzz_%: fuzz/fuzz_%.c fuzz/fuzz_input.h $(FUZZ_BUILD)/libbspray.a
+	clang -std=c11 -D_POSIX_C_SOURCE=200809L $(WARN) -O1 -g $(FUZZ_SAN) -fsanitize=fuzzer \
+	    -Iinclude -Isrc -o $@ $< $(FUZZ_BUILD)/libbspray.a $(LDLIBS)
+
 PREFIX  ?= /usr/local
 DESTDIR ?=
 
@@ -158,6 +175,6 @@ install: $(PUBLIC_LIB) $(SHLIB) $(CLI)
 	    > $(DESTDIR)$(PREFIX)/lib/pkgconfig/bspray.pc
 
 clean:
-	rm -rf build build-asan build-clang out
+	rm -rf build build-asan build-clang $(FUZZ_BUILD) out
 
 -include $(PIC_OBJ:.o=.d) $(LIB_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(CLI_OBJ:.o=.d) $(EMBREE_OBJ:.o=.d)

@@ -457,8 +457,8 @@ static void warn_ranges(parser *P)
     static const char *const what[MATERIAL_RANGE_KINDS] = {
         "a colour component above 1 (NFF colours run from 0 to 1)",
         "Kd or Ks above 1 (usually 0 to 1): surfaces may reflect more light than reaches them",
-        "a transmittance T above 1 (T is the fraction of the transmitted ray's light): "
-        "pixels may overflow"};
+        ("a transmittance T above 1 (T is the fraction of the transmitted ray's light): "
+         "pixels may overflow")};
     for (int k = 0; k < MATERIAL_RANGE_KINDS; k++) {
         size_t c = P->out_of_range[k];
         if (c)
