@@ -39,8 +39,8 @@ static const char render_usage[] =
 static const char render_help[] =
     "Render SCENE with the Whitted ray tracer of the SPD and print its ray statistics.\n"
     "\n"
-    "SCENE is an NFF file (.nff or .nff.gz), a mesh (.obj, .ply) or spd:NAME[:SIZE] for a\n"
-    "built-in SPD scene. A mesh has no camera: it is viewed from outside its bounding box\n"
+    "SCENE is an NFF file (.nff or .nff.gz), a mesh (.obj, .ply, also .gz) or\n"
+    "spd:NAME[:SIZE][:tN] for a built-in SPD scene. A mesh has no camera: it is viewed from outside its bounding box\n"
     "along the diagonal with a 45 degree field of view and a light at the eye.\n"
     "\n"
     "  -o FILE            output image; .ppm writes binary PPM, anything else PNG\n"
@@ -724,7 +724,8 @@ static void print_main_help(FILE *f)
             "  ab       two structures (the default, and one changed by options) timed\n"
             "           side by side on the same rays\n"
             "\n"
-            "SCENE is an NFF file (.nff, .nff.gz) or spd:NAME[:SIZE], a built-in SPD scene:\n"
+            "SCENE is an NFF file (.nff, .nff.gz), a mesh (.obj, .ply, either also .gz) or\n"
+            "spd:NAME[:SIZE][:tN], a built-in SPD scene (tN: spheres and cones as triangles):\n"
             "  %s\n",
             BSPRAY_VERSION_STRING, bsp_spd_scene_names());
 }
