@@ -634,7 +634,7 @@ TEST(spd_count_predicts_the_scene)
 }
 
 /* A tessellated scene of more than SPD_MAX_PRIMS primitives is refused before
- * anything is made (rings:100:t8 would be about a billion triangles, far
+ * anything is made (rings:100:t8 would be some 650 million triangles, far
  * more than this machine's memory), by the scene and by the NFF writer. */
 TEST(spd_tessellated_scene_too_large)
 {

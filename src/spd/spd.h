@@ -78,8 +78,8 @@ SPD_HIDDEN size_t spd_tess_cone_count(const spd_tess *t, bsp_vec3 base, double b
 /* The most primitives a generated scene may have: the size factors of the
  * registry (spd.c) keep every untessellated scene under it, and a
  * tessellated one is counted before it is made (spd_count) and refused
- * above it, instead of filling the memory (rings:100:t8 would make about a
- * billion triangles, 100+ GB). */
+ * above it, instead of filling the memory (rings:100:t8 would make some
+ * 650 million triangles, over 60 GB). */
 #define SPD_MAX_PRIMS 100000000u
 
 /* --- the sink ------------------------------------------------------------ */
