@@ -47,29 +47,6 @@ static inline bsp_scene *fuzz_scene(const uint8_t *d, size_t n, bsp_accel_kind *
     return s;
 }
 
-/* The structure KIND over S, built on one thread with a small memory cap
- * (NULL when the build refuses: a cap, or sah-per without a camera), and
- * the naive method over S (which must build). */
-static inline bsp_accel *fuzz_build(const bsp_scene *s, bsp_accel_kind kind, bsp_accel **naive)
-{
-    bsp_build_options o, on;
-    bsp_build_options_defaults(&o);
-    o.kind = kind;
-    o.threads = 1;
-    o.max_tree_bytes = (size_t)64 << 20;
-    bsp_build_options_defaults(&on);
-    on.kind = BSP_ACCEL_NAIVE;
-    bsp_error err;
-    bsp_accel *a = NULL;
-    if (bsp_accel_build(s, &o, &a, &err) != BSP_OK)
-        return NULL;
-    if (bsp_accel_build(s, &on, naive, &err) != BSP_OK) {
-        fprintf(stderr, "naive build failed: %s\n", err.message);
-        abort();
-    }
-    return a;
-}
-
 /* A scene read from an input, with its structure and the naive method. */
 typedef struct fuzz_case {
     bsp_accel_kind kind;
@@ -84,11 +61,25 @@ static inline int fuzz_prepare(const uint8_t *d, size_t n, fuzz_case *c)
     c->scene = fuzz_scene(d, n, &c->kind);
     if (!c->scene)
         return 0;
-    c->naive = NULL;
-    c->accel = fuzz_build(c->scene, c->kind, &c->naive);
-    if (!c->accel) {
+    /* the structure on one thread with a small memory cap (skipped when the
+     * build refuses: the cap, or sah-per without a camera); the naive
+     * method must build */
+    bsp_build_options o, on;
+    bsp_build_options_defaults(&o);
+    o.kind = c->kind;
+    o.threads = 1;
+    o.max_tree_bytes = (size_t)64 << 20;
+    bsp_build_options_defaults(&on);
+    on.kind = BSP_ACCEL_NAIVE;
+    bsp_error err;
+    c->accel = c->naive = NULL;
+    if (bsp_accel_build(c->scene, &o, &c->accel, &err) != BSP_OK) {
         bsp_scene_destroy(c->scene);
         return 0;
+    }
+    if (bsp_accel_build(c->scene, &on, &c->naive, &err) != BSP_OK) {
+        fprintf(stderr, "naive build failed: %s\n", err.message);
+        abort();
     }
     return 1;
 }

@@ -102,10 +102,12 @@ typedef struct parser {
     bsp_vec3 *vbuf; /* reusable vertex (and normal) buffer of polygons */
     size_t vcap;
     size_t v_line; /* line of the v block, 0 before it */
-    /* 'f' records outside the ranges NFF.TXT gives (warned once per kind at
-     * the end): how many, and the line and value of the first */
-    size_t out_of_range[MATERIAL_RANGE_KINDS], out_of_range_line[MATERIAL_RANGE_KINDS];
-    double out_of_range_value[MATERIAL_RANGE_KINDS];
+    /* 'f' records outside the ranges NFF.TXT gives, per kind (warned once
+     * per kind at the end): how many, and the line and value of the first */
+    struct {
+        size_t count, line;
+        double value;
+    } out_of_range[MATERIAL_RANGE_KINDS];
 } parser;
 
 static int is_space(char c)
@@ -445,9 +447,9 @@ static void note_range(parser *P, int kind, double v, size_t line)
 {
     if (!(v > 1.0))
         return;
-    if (P->out_of_range[kind]++ == 0) {
-        P->out_of_range_line[kind] = line;
-        P->out_of_range_value[kind] = v;
+    if (P->out_of_range[kind].count++ == 0) {
+        P->out_of_range[kind].line = line;
+        P->out_of_range[kind].value = v;
     }
 }
 
@@ -460,11 +462,11 @@ static void warn_ranges(parser *P)
         ("a transmittance T above 1 (T is the fraction of the transmitted ray's light): "
          "pixels may overflow")};
     for (int k = 0; k < MATERIAL_RANGE_KINDS; k++) {
-        size_t c = P->out_of_range[k];
+        size_t c = P->out_of_range[k].count;
         if (c)
             scene_warn(P->scene, "%s:%zu: %zu 'f' record%s with %s; the first has %g", P->name,
-                       P->out_of_range_line[k], c, c == 1 ? "" : "s", what[k],
-                       P->out_of_range_value[k]);
+                       P->out_of_range[k].line, c, c == 1 ? "" : "s", what[k],
+                       P->out_of_range[k].value);
     }
 }
 

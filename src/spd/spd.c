@@ -377,13 +377,12 @@ static bsp_status check_tess_size(const spd_entry *e, int size, const spd_tess *
 {
     if (!tess || spd_count(e->gen, size, tess) <= SPD_MAX_PRIMS)
         return BSP_OK;
-    spd_tess t = *tess;
     return error_set(err, BSP_ERR_LIMIT, NULL, 0,
                      "spd:%s:%d:t%d: the tessellation would make more than %u primitives "
                      "(level %d makes %zu triangles of a sphere, %d of a cone): choose a "
                      "smaller size or level",
-                     e->name, size, t.slices, SPD_MAX_PRIMS, t.slices,
-                     2 * (size_t)t.slices * (size_t)(t.bands - 1), 2 * t.slices);
+                     e->name, size, tess->slices, SPD_MAX_PRIMS, tess->slices,
+                     spd_tess_sphere_triangles(tess), 2 * tess->slices);
 }
 
 /* Parses "tN" (or "TN") into T; returns 0 when TEXT is not that or N is

@@ -69,6 +69,8 @@ typedef struct spd_tess {
  * range. */
 SPD_HIDDEN int spd_tess_init(spd_tess *t, int level);
 
+/* The triangles the tessellation T makes of a sphere. */
+SPD_HIDDEN size_t spd_tess_sphere_triangles(const spd_tess *t);
 /* How many primitives the tessellation T makes of a sphere or a cone: its
  * triangles, or 1 when it passes the primitive on as it is. */
 SPD_HIDDEN size_t spd_tess_sphere_count(const spd_tess *t, bsp_vec3 c, double radius);

@@ -375,10 +375,15 @@ static void tess_cone(spd_sink *s, bsp_vec3 base, double base_r, bsp_vec3 apex,
     }
 }
 
-size_t spd_tess_sphere_count(const spd_tess *t, bsp_vec3 c, double radius)
+size_t spd_tess_sphere_triangles(const spd_tess *t)
 {
     /* two fans of N triangles around the poles, two per quad between */
-    return sphere_untessellated(c, radius) ? 1 : 2 * (size_t)t->slices * (size_t)(t->bands - 1);
+    return 2 * (size_t)t->slices * (size_t)(t->bands - 1);
+}
+
+size_t spd_tess_sphere_count(const spd_tess *t, bsp_vec3 c, double radius)
+{
+    return sphere_untessellated(c, radius) ? 1 : spd_tess_sphere_triangles(t);
 }
 
 size_t spd_tess_cone_count(const spd_tess *t, bsp_vec3 base, double base_r, bsp_vec3 apex,
