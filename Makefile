@@ -58,7 +58,7 @@ TESTS := $(BUILD)/bspray_tests
 EMBREE_CLI := $(BUILD)/bspray-embree
 
 .PHONY: all run test asan-test clean embree-compare examples install shared fuzz
-all: $(LIB) $(PUBLIC_LIB) $(BUILD)/libbspray.so $(CLI) $(EXAMPLES) $(EXAMPLES_SHARED)
+all: $(LIB) $(PUBLIC_LIB) $(BUILD)/libbspray.so $(CLI) $(TESTS) $(EXAMPLES) $(EXAMPLES_SHARED)
 examples: $(EXAMPLES) $(EXAMPLES_SHARED)
 shared: $(BUILD)/libbspray.so
 
