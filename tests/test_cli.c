@@ -81,6 +81,47 @@ TEST(cli_bench_table_and_csv)
     CHECK_RUN(cmd, 2, "'--repeat'");
 }
 
+/* render and viz check every output path before they work: an unwritable
+ * one fails at once (exit 1, the file named), with no statistics printed and
+ * none of the other outputs written. */
+TEST(cli_outputs_checked_before_the_render)
+{
+    char cmd[4096], img[512], json[512], bad[512];
+    harness_tmp_path(img, sizeof img, "early.png");
+    harness_tmp_path(json, sizeof json, "early.json");
+    harness_tmp_path(bad, sizeof bad, "no/such/dir/out");
+    const char *needle[3] = {"out.png: cannot open for writing", "out.json: cannot open for writing",
+                             "out.png: cannot open for writing"};
+    for (int c = 0; c < 3; c++) {
+        remove(img);
+        remove(json);
+        char opts[2048];
+        if (c == 0) /* the image */
+            snprintf(opts, sizeof opts, "-o %s.png --stats-json %s", bad, json);
+        else if (c == 1) /* the statistics */
+            snprintf(opts, sizeof opts, "-o %s --stats-json %s.json", img, bad);
+        else /* the cost map */
+            snprintf(opts, sizeof opts, "-o %s --stats-json %s --cost-map %s.png", img, json, bad);
+        snprintf(cmd, sizeof cmd, "%s render spd:balls:1 --res 16 %s 2>&1", harness_cli(), opts);
+        int st;
+        char *out = harness_run(cmd, &st);
+        REQUIRE(out);
+        CHECK_EQ_INT(st, 1);
+        CHECK_STR_CONTAINS(out, needle[c]);
+        CHECK_MSG(!strstr(out, "PrimaryRay"), "case %d rendered before failing:\n%s", c, out);
+        free(out);
+        FILE *f = fopen(img, "rb"), *g = fopen(json, "rb");
+        CHECK_MSG(!f && !g, "case %d left an output behind (image %d, json %d)", c, f != NULL,
+                  g != NULL);
+        if (f)
+            fclose(f);
+        if (g)
+            fclose(g);
+    }
+    snprintf(cmd, sizeof cmd, "%s viz spd:balls:1 --accel sah -o %s.png 2>&1", harness_cli(), bad);
+    CHECK_RUN(cmd, 1, "out.png: cannot open for writing");
+}
+
 /* The ScnCoverage and PrimaryRay of a render's --stats-json file. */
 static int json_coverage(const char *path, double *cov, long *primary)
 {

@@ -341,7 +341,9 @@ static int cmd_render(int argc, char **argv)
         bsp_scene_destroy(scene);
         return EXIT_INPUT;
     }
-    if (cost_path && !output_path_writable(cost_path)) {
+    /* every output before the render, which may take minutes */
+    if (!output_path_writable(out_path) || (json_path && !output_path_writable(json_path)) ||
+        (cost_path && !output_path_writable(cost_path))) {
         bsp_scene_destroy(scene);
         return EXIT_INPUT;
     }

@@ -198,6 +198,8 @@ int cmd_viz(int argc, char **argv)
                     prog);
             return EXIT_INPUT;
         }
+    if (!output_path_writable(out_path)) /* before the builds and renders */
+        return EXIT_INPUT;
 
     bsp_scene *scene = load_scene(scene_path);
     apply_view_args(scene, scene_path, &view, NULL, NULL);
