@@ -167,7 +167,13 @@ typedef struct sah_build {
     uint64_t *ev;       /* the event stack */
     size_t cap;
     uint64_t *nev[2];   /* new events of straddlers per side, axis j at j * stride */
-    size_t nev_cap;
+    uint64_t *both;     /* a split of many straddlers: their old events, axis j at
+                           j * stride, in the lists' order (kd_split_sah.c) */
+    uint64_t *reord;    /* and one side's new events of one axis in that order */
+    size_t nev_cap;     /* of each of the four */
+    uint32_t *sidx;     /* per primitive: its index among a split's straddlers */
+    uint32_t *slot;     /* per straddler and side: its new events' pair in nev, or none */
+    size_t slot_cap;
     uint32_t *list;     /* straddlers, leaf lists */
     size_t list_cap;
     kd_clip_scratch clip;

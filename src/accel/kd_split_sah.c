@@ -106,6 +106,13 @@
 #define STRADDLE_GUARD_NUM 19
 #define STRADDLE_GUARD_DEN 20
 #define ROOT_LISTS_PARALLEL_MIN (1u << 17) /* events per axis: a thread for fewer costs more */
+/* A split of at least ORDERED_NEW_MIN straddlers, one in ORDERED_NEW_SHARE
+ * of its primitives or more, keeps the order of their events that clipping
+ * leaves as they were (kd_sah_build_node, step 4): 2 x 25 keys are past the
+ * insertion sort of sort_keys, and gathering the old events costs a pass
+ * over all of the node's, which fewer straddlers do not repay. */
+#define ORDERED_NEW_MIN 25
+#define ORDERED_NEW_SHARE 4
 
 /* --- sorting -------------------------------------------------------------------------- */
 
@@ -160,11 +167,12 @@ static int grow_nev(sah_build *b, size_t need)
     if (need <= b->nev_cap)
         return 1;
     size_t ncap = b->nev_cap * 2 > need ? b->nev_cap * 2 : need;
-    for (int s = 0; s < 2; s++) {
-        uint64_t *np = realloc(b->nev[s], ncap * sizeof *np);
+    uint64_t **bufs[4] = {&b->nev[0], &b->nev[1], &b->both, &b->reord};
+    for (int s = 0; s < 4; s++) {
+        uint64_t *np = realloc(*bufs[s], ncap * sizeof *np);
         if (!np)
             return 0;
-        b->nev[s] = np;
+        *bufs[s] = np;
     }
     b->nev_cap = ncap;
     return 1;
@@ -414,6 +422,59 @@ static inline __attribute__((always_inline)) void split_list(uint64_t *src, uint
     }
 }
 
+/* Sorts the new events NW of side C's straddlers on one axis (their pairs
+ * at b->slot, kd_sah_build_node step 4), given the straddlers' old events
+ * of that axis in the lists' order, BOTH[0..NBOTH) (room for STRIDE more
+ * after the three axes'). A new event equal to its old one keeps its place:
+ * those, taken in the old order, are sorted already; only the others are
+ * sorted, and the two runs merged. */
+static void sort_new_in_order(sah_build *b, uint64_t *nw, const uint64_t *both, size_t nboth,
+                              size_t stride, int c)
+{
+    uint64_t *same_run = b->both + 3 * stride, *moved = b->reord;
+    size_t same = 0, nmoved = 0;
+    for (size_t j = 0; j < nboth; j++) {
+        const uint64_t x = both[j];
+        const uint32_t sl = b->slot[2 * (size_t)b->sidx[ev_prim(x)] + (size_t)c];
+        if (sl == UINT32_MAX)
+            continue; /* not in this child */
+        const uint64_t y = nw[2 * (size_t)sl + ((x & EV_START) ? 0 : 1)]; /* START, END */
+        if (y == x)
+            same_run[same++] = y;
+        else
+            moved[nmoved++] = y;
+    }
+    sort_keys(moved, nmoved);
+    size_t i0 = 0, i1 = 0, w = 0;
+    while (i0 < same && i1 < nmoved)
+        nw[w++] = same_run[i0] < moved[i1] ? same_run[i0++] : moved[i1++];
+    while (i0 < same)
+        nw[w++] = same_run[i0++];
+    while (i1 < nmoved)
+        nw[w++] = moved[i1++];
+}
+
+/* split_list, and the straddlers' events (class CLS_BOTH) gathered in
+ * order into BOTH (one past the last stored too); returns their count. */
+static inline __attribute__((always_inline)) size_t
+split_list_gather(uint64_t *src, uint64_t *dst, uint64_t *both, size_t m, const uint8_t *cls,
+                  const unsigned in_place)
+{
+    const unsigned other = CLS_LEFT + CLS_RIGHT - in_place;
+    size_t a = 0, o = 0, s = 0;
+    for (size_t i = 0; i < m; i++) {
+        uint64_t x = src[i];
+        unsigned c = cls[ev_prim(x)];
+        src[a] = x;
+        a += (c & in_place) != 0;
+        dst[o] = x;
+        o += (c & other) != 0;
+        both[s] = x;
+        s += c == CLS_BOTH;
+    }
+    return s;
+}
+
 /* Builds the subtree of NODE over CELL from the lists L; ev[top, ...) is
  * free. *COST_OUT: the subtree's cost under the model (for retraction).
  * SURFACE: measure by the surface area. A view measure (sah-per, sah-par)
@@ -569,10 +630,25 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
             strad[nsg] = p;
             nsg += cls[p] == CLS_BOTH;
         }
+        /* Many straddlers: their old events are gathered in the lists' order
+         * as the lists are split, and their new events made in that order
+         * (step 4), nearly sorted already: a clipped bound moves inward,
+         * mostly past few others. Sorting them afresh was over a third of
+         * the build of shells, whose nested spheres straddle most splits. */
+        const size_t stride = 2 * ns;
+        const int ordered = ns >= ORDERED_NEW_MIN && ns * ORDERED_NEW_SHARE >= n;
+        if (ns > 0 && !grow_nev(b, 4 * stride + 1))
+            return oom(b);
+        size_t nboth[3] = {0, 0, 0};
         for (unsigned k = 0; k < 3; k++) {
             uint64_t *src = b->ev + L.base + k * L.stride; /* in place, a <= i */
             uint64_t *dst = b->ev + stored->base + k * stored->stride;
-            if (right_in_place)
+            uint64_t *both = ordered ? b->both + k * stride : NULL;
+            if (ordered && right_in_place)
+                nboth[k] = split_list_gather(src, dst, both, m, cls, CLS_RIGHT);
+            else if (ordered)
+                nboth[k] = split_list_gather(src, dst, both, m, cls, CLS_LEFT);
+            else if (right_in_place)
                 split_list(src, dst, m, cls, CLS_RIGHT);
             else
                 split_list(src, dst, m, cls, CLS_LEFT);
@@ -583,8 +659,8 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
         size_t kept[2] = {0, 0};
         double tkept[2] = {0.0, 0.0};
         if (ns > 0) {
-            const size_t stride = 2 * ns;
-            if (!grow_nev(b, 3 * stride))
+            if (ordered && ((!b->sidx && !(b->sidx = malloc((size_t)b->spare * sizeof *b->sidx))) ||
+                            !GROW_ARRAY(b->slot, b->slot_cap, 2 * ns)))
                 return oom(b);
             int fail = 0;
             for (size_t i = 0; i < ns; i++) {
@@ -598,8 +674,13 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
                 }
                 const bsp_box *cc[2] = {&lcell, &rcell};
                 for (int c = 0; c < 2; c++) {
-                    if ((got >> c & 1) &&
-                        clipped_events(b, p, &cb[c], cc[c], b->nev[c], stride, 2 * kept[c])) {
+                    const int in = (got >> c & 1) &&
+                        clipped_events(b, p, &cb[c], cc[c], b->nev[c], stride, 2 * kept[c]);
+                    if (ordered) {
+                        b->sidx[p] = (uint32_t)i;
+                        b->slot[2 * i + (size_t)c] = in ? (uint32_t)kept[c] : UINT32_MAX;
+                    }
+                    if (in) {
                         kept[c]++;
                         tkept[c] += tp;
                     }
@@ -609,8 +690,13 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
                 return oom(b);
             for (unsigned k = 0; k < 3; k++) {
                 uint64_t *nl_ev = b->nev[0] + k * stride, *nr_ev = b->nev[1] + k * stride;
-                sort_keys(nl_ev, 2 * kept[0]);
-                sort_keys(nr_ev, 2 * kept[1]);
+                if (ordered) {
+                    sort_new_in_order(b, nl_ev, b->both + k * stride, nboth[k], stride, 0);
+                    sort_new_in_order(b, nr_ev, b->both + k * stride, nboth[k], stride, 1);
+                } else {
+                    sort_keys(nl_ev, 2 * kept[0]);
+                    sort_keys(nr_ev, 2 * kept[1]);
+                }
                 merge_back(b->ev + LL.base + k * LL.stride, 2 * n_lonly, nl_ev, 2 * kept[0]);
                 merge_back(b->ev + RL.base + k * RL.stride, 2 * n_ronly, nr_ev, 2 * kept[1]);
             }
@@ -950,7 +1036,9 @@ void kd_sah_scratch_forget(sah_build *b)
 {
     b->cls = NULL;
     b->ev = NULL;
-    b->nev[0] = b->nev[1] = NULL;
+    b->nev[0] = b->nev[1] = b->both = b->reord = NULL;
+    b->sidx = b->slot = NULL;
+    b->slot_cap = 0;
     b->list = NULL;
     b->chunks = NULL;
     b->mruns = NULL;
@@ -967,6 +1055,10 @@ void kd_sah_scratch_free(sah_build *b)
     free(b->ev);
     free(b->nev[0]);
     free(b->nev[1]);
+    free(b->both);
+    free(b->reord);
+    free(b->sidx);
+    free(b->slot);
     free(b->list);
     free(b->chunks);
     free(b->mruns);
@@ -983,6 +1075,11 @@ void kd_sah_scratch_move(sah_build *to, sah_build *from)
     to->cap = from->cap;
     to->nev[0] = from->nev[0];
     to->nev[1] = from->nev[1];
+    to->both = from->both;
+    to->reord = from->reord;
+    to->sidx = from->sidx;
+    to->slot = from->slot;
+    to->slot_cap = from->slot_cap;
     to->nev_cap = from->nev_cap;
     to->list = from->list;
     to->list_cap = from->list_cap;
