@@ -403,14 +403,16 @@ classify(sah_build *b, const uint64_t *e, size_t split_i, size_t m, classify_cou
 /* Step 3 of kd_sah_build_node for one axis: the events of SRC[0..M) whose
  * primitive's class is IN_PLACE (CLS_LEFT or CLS_RIGHT) compacted in place,
  * those of the other one-sided class copied to DST, both stable; a
- * straddler's (CLS_BOTH) go nowhere. Stores one event past the last of DST.
- * Inlined with IN_PLACE constant: no test of it per event. */
-static inline __attribute__((always_inline)) void split_list(uint64_t *src, uint64_t *dst,
-                                                             size_t m, const uint8_t *cls,
-                                                             const unsigned in_place)
+ * straddler's (CLS_BOTH) go nowhere, or with GATHER into BOTH, in order
+ * (returns their count then). Stores one event past the last of DST (and of
+ * BOTH). Inlined with IN_PLACE and GATHER constant: no test of them per
+ * event. */
+static inline __attribute__((always_inline)) size_t
+split_list(uint64_t *src, uint64_t *dst, uint64_t *both, size_t m, const uint8_t *cls,
+           const unsigned in_place, const int gather)
 {
     const unsigned other = CLS_LEFT + CLS_RIGHT - in_place;
-    size_t a = 0, o = 0;
+    size_t a = 0, o = 0, s = 0;
 #pragma GCC unroll 4
     for (size_t i = 0; i < m; i++) {
         uint64_t x = src[i];
@@ -419,7 +421,12 @@ static inline __attribute__((always_inline)) void split_list(uint64_t *src, uint
         a += (c & in_place) != 0;
         dst[o] = x;
         o += (c & other) != 0;
+        if (gather) {
+            both[s] = x;
+            s += c == CLS_BOTH;
+        }
     }
+    return s;
 }
 
 /* Sorts the new events NW of side C's straddlers on one axis (their pairs
@@ -452,27 +459,6 @@ static void sort_new_in_order(sah_build *b, uint64_t *nw, const uint64_t *both, 
         nw[w++] = same_run[i0++];
     while (i1 < nmoved)
         nw[w++] = moved[i1++];
-}
-
-/* split_list, and the straddlers' events (class CLS_BOTH) gathered in
- * order into BOTH (one past the last stored too); returns their count. */
-static inline __attribute__((always_inline)) size_t
-split_list_gather(uint64_t *src, uint64_t *dst, uint64_t *both, size_t m, const uint8_t *cls,
-                  const unsigned in_place)
-{
-    const unsigned other = CLS_LEFT + CLS_RIGHT - in_place;
-    size_t a = 0, o = 0, s = 0;
-    for (size_t i = 0; i < m; i++) {
-        uint64_t x = src[i];
-        unsigned c = cls[ev_prim(x)];
-        src[a] = x;
-        a += (c & in_place) != 0;
-        dst[o] = x;
-        o += (c & other) != 0;
-        both[s] = x;
-        s += c == CLS_BOTH;
-    }
-    return s;
 }
 
 /* Builds the subtree of NODE over CELL from the lists L; ev[top, ...) is
@@ -645,13 +631,13 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
             uint64_t *dst = b->ev + stored->base + k * stored->stride;
             uint64_t *both = ordered ? b->both + k * stride : NULL;
             if (ordered && right_in_place)
-                nboth[k] = split_list_gather(src, dst, both, m, cls, CLS_RIGHT);
+                nboth[k] = split_list(src, dst, both, m, cls, CLS_RIGHT, 1);
             else if (ordered)
-                nboth[k] = split_list_gather(src, dst, both, m, cls, CLS_LEFT);
+                nboth[k] = split_list(src, dst, both, m, cls, CLS_LEFT, 1);
             else if (right_in_place)
-                split_list(src, dst, m, cls, CLS_RIGHT);
+                split_list(src, dst, NULL, m, cls, CLS_RIGHT, 0);
             else
-                split_list(src, dst, m, cls, CLS_LEFT);
+                split_list(src, dst, NULL, m, cls, CLS_LEFT, 0);
         }
 
         /* 4. clip the straddlers to each child; their new events, sorted,
