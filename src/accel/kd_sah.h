@@ -168,8 +168,9 @@ typedef struct sah_build {
     size_t cap;
     uint64_t *nev[2];   /* new events of straddlers per side, axis j at j * stride */
     uint64_t *both;     /* a split of many straddlers: their old events, axis j at
-                           j * stride, in the lists' order (kd_split_sah.c) */
-    uint64_t *reord;    /* and one side's new events of one axis in that order */
+                           j * stride, in the lists' order, then room for one
+                           side's unchanged new events (sort_new_in_order) */
+    uint64_t *reord;    /* and for its changed ones */
     size_t nev_cap;     /* of each of the four */
     uint32_t *sidx;     /* per primitive: its index among a split's straddlers */
     uint32_t *slot;     /* per straddler and side: its new events' pair in nev, or none */

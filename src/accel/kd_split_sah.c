@@ -617,9 +617,9 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
             nsg += cls[p] == CLS_BOTH;
         }
         /* Many straddlers: their old events are gathered in the lists' order
-         * as the lists are split, and their new events made in that order
-         * (step 4), nearly sorted already: a clipped bound moves inward,
-         * mostly past few others. Sorting them afresh was over a third of
+         * as the lists are split, so that in step 4 the new events equal to
+         * old ones keep that order and only the others are sorted
+         * (sort_new_in_order). Sorting all of them afresh was over a third of
          * the build of shells, whose nested spheres straddle most splits. */
         const size_t stride = 2 * ns;
         const int ordered = ns >= ORDERED_NEW_MIN && ns * ORDERED_NEW_SHARE >= n;
@@ -652,6 +652,8 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
             for (size_t i = 0; i < ns; i++) {
                 uint32_t p = strad[i];
                 double tp = b->cost ? (double)b->cost[p] : 0.0;
+                if (ordered)
+                    b->sidx[p] = (uint32_t)i;
                 bsp_box cb[2];
                 int got = clip_straddler(b, p, &cell, axis, s, cb);
                 if (got < 0) {
@@ -662,10 +664,8 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
                 for (int c = 0; c < 2; c++) {
                     const int in = (got >> c & 1) &&
                         clipped_events(b, p, &cb[c], cc[c], b->nev[c], stride, 2 * kept[c]);
-                    if (ordered) {
-                        b->sidx[p] = (uint32_t)i;
+                    if (ordered) /* where its new events lie, for sort_new_in_order */
                         b->slot[2 * i + (size_t)c] = in ? (uint32_t)kept[c] : UINT32_MAX;
-                    }
                     if (in) {
                         kept[c]++;
                         tkept[c] += tp;
