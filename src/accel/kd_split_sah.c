@@ -434,7 +434,7 @@ split_list(uint64_t *src, uint64_t *dst, uint64_t *both, size_t m, const uint8_t
  * of that axis in the lists' order, BOTH[0..NBOTH) (room for STRIDE more
  * after the three axes'). A new event equal to its old one keeps its place:
  * those, taken in the old order, are sorted already; only the others are
- * sorted, and the two runs merged. */
+ * sorted, and merged into them (merge_back). */
 static void sort_new_in_order(sah_build *b, uint64_t *nw, const uint64_t *both, size_t nboth,
                               size_t stride, int c)
 {
@@ -452,13 +452,8 @@ static void sort_new_in_order(sah_build *b, uint64_t *nw, const uint64_t *both, 
             moved[nmoved++] = y;
     }
     sort_keys(moved, nmoved);
-    size_t i0 = 0, i1 = 0, w = 0;
-    while (i0 < same && i1 < nmoved)
-        nw[w++] = same_run[i0] < moved[i1] ? same_run[i0++] : moved[i1++];
-    while (i0 < same)
-        nw[w++] = same_run[i0++];
-    while (i1 < nmoved)
-        nw[w++] = moved[i1++];
+    memcpy(nw, same_run, same * sizeof *nw);
+    merge_back(nw, same, moved, nmoved);
 }
 
 /* Builds the subtree of NODE over CELL from the lists L; ev[top, ...) is
