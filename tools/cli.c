@@ -339,7 +339,7 @@ static int in_saving_range(double x)
     "  --leaf-budget-min N  sah family: ... but never fewer than N leaves (default 131072)\n"  \
     "  --budget-cut F|off sah family: estimate the budget's threshold from a sample of\n"     \
     "                     subtrees and skip the splits saving less than F times it, F > 0\n" \
-    "                     (default 0.5; any F builds the same tree, a large one only\n"       \
+    "                     (default 0.75; any F builds the same tree, a large one only\n"       \
     "                     twice); off builds the whole tree, then prunes\n"                   \
     "  --straddle once|twice  sah family: a primitive straddling a split costs a ray\n"      \
     "                     through both children one test and a mailbox hit (once, the\n"    \

@@ -124,7 +124,7 @@ typedef struct bsp_build_options {
                                 save less than this share of the estimate are not made
                                 (docs/kdtree.md). Any value builds the same tree: a
                                 share too high only costs a second build, one too low
-                                saves less. 0: the default (0.5), negative: no
+                                saves less. 0: the default (0.75), negative: no
                                 estimate (the whole tree is built, then pruned) */
     int sah_split_to_limits; /* sah family: 1 splits every node until max_depth or
                                 max_leaf_prims ends it (the paper's termination criteria);
