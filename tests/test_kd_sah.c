@@ -1456,6 +1456,11 @@ TEST(sah_split_clip_matches_clipping_each_child)
                         CHECK(fabs(split[c].lo.v[k] - one.lo.v[k]) <= 1e-12);
                         CHECK(fabs(split[c].hi.v[k] - one.hi.v[k]) <= 1e-12);
                     }
+                    /* a sphere's two children are clipped by the same arithmetic as
+                     * one child alone (clip_sphere_split): the very bits */
+                    if (prim == 1)
+                        CHECK_MSG(memcmp(&split[c], &one, sizeof one) == 0,
+                                  "trial %d: the sphere's side %d differs in its bits", trial, c);
                 }
             }
             both += got == 3;

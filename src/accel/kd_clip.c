@@ -371,16 +371,18 @@ static inline double reach(double r2, double r, double d2o)
     return dmin(sqrt(dmax(r2 - d2o, 0.0) + ROUND_SLACK * (r2 + d2o)), r);
 }
 
-/* Bounds of the sphere's surface ∩ G (through the ball ∩ G, exact per
- * axis); 0 when the ball misses G or G lies inside the sphere. */
-static int clip_sphere(const sphere_shape *s, const bsp_box *g, bsp_box *b)
+/* clip_sphere given the distances GAP and FAR of the centre to G on each
+ * axis (gap_and_far). EXT_AXIS (0..2, or -1: none) names an axis whose
+ * extent *EXT_CACHE holds, or NAN until computed here: the extent on an
+ * axis depends only on the gaps of the other two, so the two children of a
+ * split on that axis share it (clip_sphere_split). */
+static int sphere_part(const sphere_shape *s, const bsp_box *g, const double gap[3],
+                       const double far[3], int ext_axis, double *ext_cache, bsp_box *b)
 {
-    double r2 = s->radius2, gap[3], d2min = 0.0, d2max = 0.0;
+    double r2 = s->radius2, d2min = 0.0, d2max = 0.0;
     for (int k = 0; k < 3; k++) {
-        double far;
-        gap_and_far(s->center.v[k], g->lo.v[k], g->hi.v[k], &gap[k], &far);
         d2min += gap[k] * gap[k];
-        d2max += far * far;
+        d2max += far[k] * far[k];
     }
     if (d2min > r2 * (1.0 + ROUND_SLACK))
         return 0; /* the ball misses G */
@@ -391,8 +393,14 @@ static int clip_sphere(const sphere_shape *s, const bsp_box *g, bsp_box *b)
     const double d2o_of[3] = {q[1] + q[2], q[0] + q[2], q[0] + q[1]};
     for (int k = 0; k < 3; k++) {
         double c = s->center.v[k];
-        double d2o = d2o_of[k];
-        double ext = reach(r2, s->radius, d2o);
+        double ext;
+        if (k == ext_axis) {
+            if (isnan(*ext_cache))
+                *ext_cache = reach(r2, s->radius, d2o_of[k]);
+            ext = *ext_cache;
+        } else {
+            ext = reach(r2, s->radius, d2o_of[k]);
+        }
         b->lo.v[k] = dmax(c - ext, g->lo.v[k]);
         b->hi.v[k] = dmin(c + ext, g->hi.v[k]);
         if (b->lo.v[k] > b->hi.v[k]) {
@@ -401,6 +409,16 @@ static int clip_sphere(const sphere_shape *s, const bsp_box *g, bsp_box *b)
         }
     }
     return 1;
+}
+
+/* Bounds of the sphere's surface ∩ G (through the ball ∩ G, exact per
+ * axis); 0 when the ball misses G or G lies inside the sphere. */
+static int clip_sphere(const sphere_shape *s, const bsp_box *g, bsp_box *b)
+{
+    double gap[3], far[3];
+    for (int k = 0; k < 3; k++)
+        gap_and_far(s->center.v[k], g->lo.v[k], g->hi.v[k], &gap[k], &far[k]);
+    return sphere_part(s, g, gap, far, -1, NULL, b);
 }
 
 /* The parameters [*H0, *H1] (within [0, length]) of the cone's axis at which
@@ -605,10 +623,54 @@ static int clip_triangle_split(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g
     return got;
 }
 
+/* kd_clip_prim_split for a sphere: both children at once, as two calls of
+ * kd_clip_prim_bounded would clip it (the same arithmetic, so the same
+ * bits), sharing what does not depend on the side: the distances to the cell
+ * on the other two axes and the extent along AXIS. Nested spheres straddle
+ * most splits (shells), and their clipping was the largest part of such a
+ * build. */
+static int clip_sphere_split(const sphere_shape *sp, bsp_box pb, const bsp_box *cell,
+                             unsigned axis, double s, double pad, bsp_box out[2])
+{
+    if (box_is_empty(pb))
+        return 0;
+    const bsp_box g = box_grow(*cell, pad);
+    double gap[3], far[3], ext_cache = NAN;
+    int shared = 0, got = 0;
+    for (int c = 0; c < 2; c++) {
+        bsp_box gc = g;
+        if (c == 0)
+            gc.hi.v[axis] = s + pad;
+        else
+            gc.lo.v[axis] = s - pad;
+        if (!box_meets(pb, &gc))
+            continue;
+        if (box_inside(pb, &gc)) {
+            out[c] = box_grow(pb, pad);
+            got |= 1 << c;
+            continue;
+        }
+        if (!shared) {
+            for (unsigned k = 0; k < 3; k++)
+                if (k != axis)
+                    gap_and_far(sp->center.v[k], g.lo.v[k], g.hi.v[k], &gap[k], &far[k]);
+            shared = 1;
+        }
+        gap_and_far(sp->center.v[axis], gc.lo.v[axis], gc.hi.v[axis], &gap[axis], &far[axis]);
+        bsp_box b;
+        if (sphere_part(sp, &gc, gap, far, (int)axis, &ext_cache, &b) &&
+            finish(b.lo.v, b.hi.v, &pb, &gc, pad, &out[c]) == 1)
+            got |= 1 << c;
+    }
+    return got;
+}
+
 int kd_clip_prim_split(const bsp_scene *scene, uint32_t prim, bsp_box pb, const bsp_box *cell,
                        unsigned axis, double s, double pad, kd_clip_scratch *scr, bsp_box out[2])
 {
     const prim_record *p = &scene->prims[prim];
+    if ((shape_kind)p->shape == SHAPE_SPHERE)
+        return clip_sphere_split(&scene->spheres[p->slot], pb, cell, axis, s, pad, out);
     if ((shape_kind)p->shape == SHAPE_TRIANGLE) {
         bsp_box g = box_grow(*cell, pad);
         if (box_is_empty(pb) || !box_meets(pb, &g))
