@@ -629,37 +629,44 @@ static int clip_triangle_split(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g
  * on the other two axes and the extent along AXIS. Nested spheres straddle
  * most splits (shells), and their clipping was the largest part of such a
  * build. */
-static int clip_sphere_split(const sphere_shape *sp, bsp_box pb, const bsp_box *cell,
+static int clip_sphere_split(const sphere_shape *sp, const bsp_box *pb, const bsp_box *cell,
                              unsigned axis, double s, double pad, bsp_box out[2])
 {
-    if (box_is_empty(pb))
+    if (box_is_empty(*pb))
         return 0;
-    const bsp_box g = box_grow(*cell, pad);
+    /* scalars, each written once: a box stored a double at a time and read
+     * back whole stalls on store forwarding (as in finish) */
     double gap[3], far[3], ext_cache = NAN;
     int shared = 0, got = 0;
     for (int c = 0; c < 2; c++) {
-        bsp_box gc = g;
-        if (c == 0)
-            gc.hi.v[axis] = s + pad;
-        else
-            gc.lo.v[axis] = s - pad;
-        if (!box_meets(pb, &gc))
+        bsp_box gc;
+        int meets = 1, inside = 1;
+        for (int k = 0; k < 3; k++) {
+            gc.lo.v[k] = (unsigned)k == axis && c == 1 ? s - pad : cell->lo.v[k] - pad;
+            gc.hi.v[k] = (unsigned)k == axis && c == 0 ? s + pad : cell->hi.v[k] + pad;
+            meets &= !(pb->lo.v[k] > gc.hi.v[k] || pb->hi.v[k] < gc.lo.v[k]);
+            inside &= pb->lo.v[k] >= gc.lo.v[k] && pb->hi.v[k] <= gc.hi.v[k];
+        }
+        if (!meets)
             continue;
-        if (box_inside(pb, &gc)) {
-            out[c] = box_grow(pb, pad);
+        if (inside) {
+            for (int k = 0; k < 3; k++) {
+                out[c].lo.v[k] = pb->lo.v[k] - pad;
+                out[c].hi.v[k] = pb->hi.v[k] + pad;
+            }
             got |= 1 << c;
             continue;
         }
         if (!shared) {
             for (unsigned k = 0; k < 3; k++)
                 if (k != axis)
-                    gap_and_far(sp->center.v[k], g.lo.v[k], g.hi.v[k], &gap[k], &far[k]);
+                    gap_and_far(sp->center.v[k], gc.lo.v[k], gc.hi.v[k], &gap[k], &far[k]);
             shared = 1;
         }
         gap_and_far(sp->center.v[axis], gc.lo.v[axis], gc.hi.v[axis], &gap[axis], &far[axis]);
         bsp_box b;
         if (sphere_part(sp, &gc, gap, far, (int)axis, &ext_cache, &b) &&
-            finish(b.lo.v, b.hi.v, &pb, &gc, pad, &out[c]) == 1)
+            finish(b.lo.v, b.hi.v, pb, &gc, pad, &out[c]) == 1)
             got |= 1 << c;
     }
     return got;
@@ -670,7 +677,7 @@ int kd_clip_prim_split(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
 {
     const prim_record *p = &scene->prims[prim];
     if ((shape_kind)p->shape == SHAPE_SPHERE)
-        return clip_sphere_split(&scene->spheres[p->slot], pb, cell, axis, s, pad, out);
+        return clip_sphere_split(&scene->spheres[p->slot], &pb, cell, axis, s, pad, out);
     if ((shape_kind)p->shape == SHAPE_TRIANGLE) {
         bsp_box g = box_grow(*cell, pad);
         if (box_is_empty(pb) || !box_meets(pb, &g))
