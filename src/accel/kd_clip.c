@@ -103,7 +103,8 @@ static inline __attribute__((always_inline)) void add_point(double lo[3], double
 
 /* The bounds of the points V[0..N) into LO and HI (add_point, in order: the
  * comparisons of box_add_point, so the same bits wherever they are taken). */
-static void points_bounds(const bsp_vec3 *v, size_t n, double lo[3], double hi[3])
+static inline __attribute__((always_inline)) void points_bounds(const bsp_vec3 *v, size_t n,
+                                                            double lo[3], double hi[3])
 {
     lo[0] = lo[1] = lo[2] = INFINITY;
     hi[0] = hi[1] = hi[2] = -INFINITY;
