@@ -144,13 +144,12 @@ static void timed_builds(const scaling_opts *o, const bsp_scene *scene, scaling_
         double w = bsp_accel_build_seconds(accel);
         *cpu = c < *cpu ? c : *cpu;
         *wall = w < *wall ? w : *wall;
-        if (threads == 1 && rep == 0)
-            r->t1_first = c;
         bsp_tree_stats ts; /* after the timing: every build's tree is checked */
         bsp_accel_tree_stats(accel, &ts);
-        if (threads == 1 && rep == 0)
+        if (threads == 1 && rep == 0) {
             r->tree = ts;
-        else if (ts.digest != r->tree.digest)
+            r->t1_first = c;
+        } else if (ts.digest != r->tree.digest)
             r->mismatch = 1;
         bsp_accel_destroy(accel);
     }

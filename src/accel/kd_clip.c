@@ -505,18 +505,20 @@ static int clip_cone(const cone_shape *c, const bsp_box *g, bsp_box *b)
     return 1;
 }
 
-static int box_inside(bsp_box a, const bsp_box *g)
+/* Whether A lies inside G (both by pointer: a box passed by value is copied
+ * whole, and one just stored a double at a time stalls on store forwarding). */
+static int box_inside(const bsp_box *a, const bsp_box *g)
 {
     for (int k = 0; k < 3; k++)
-        if (!(a.lo.v[k] >= g->lo.v[k] && a.hi.v[k] <= g->hi.v[k]))
+        if (!(a->lo.v[k] >= g->lo.v[k] && a->hi.v[k] <= g->hi.v[k]))
             return 0;
     return 1;
 }
 
-static int box_meets(bsp_box a, const bsp_box *g)
+static int box_meets(const bsp_box *a, const bsp_box *g)
 {
     for (int k = 0; k < 3; k++)
-        if (a.lo.v[k] > g->hi.v[k] || a.hi.v[k] < g->lo.v[k])
+        if (a->lo.v[k] > g->hi.v[k] || a->hi.v[k] < g->lo.v[k])
             return 0;
     return 1;
 }
@@ -533,10 +535,10 @@ int kd_clip_prim_bounded(const bsp_scene *scene, uint32_t prim, bsp_box pb, cons
 {
     const prim_record *p = &scene->prims[prim];
     bsp_box g = box_grow(*box, pad), b;
-    if (box_is_empty(pb) || !box_meets(pb, &g))
+    if (box_is_empty(pb) || !box_meets(&pb, &g))
         return 0;
     int r = 1;
-    if (box_inside(pb, &g)) {
+    if (box_inside(&pb, &g)) {
         b = pb;
     } else {
         switch ((shape_kind)p->shape) {
@@ -601,7 +603,7 @@ static int clip_triangle_split(const bsp_vec3 v[3], bsp_box pb, const bsp_box *g
             gc.hi.v[axis] = cl;
         else
             gc.lo.v[axis] = cr;
-        if (box_inside(pb, &gc)) {
+        if (box_inside(&pb, &gc)) {
             out[c] = box_grow(pb, pad);
             got |= 1 << c;
             continue;
@@ -635,26 +637,20 @@ static int clip_sphere_split(const sphere_shape *sp, const bsp_box *pb, const bs
 {
     if (box_is_empty(*pb))
         return 0;
-    /* scalars, each written once: a box stored a double at a time and read
-     * back whole stalls on store forwarding (as in finish) */
     double gap[3], far[3], ext_cache = NAN;
     int shared = 0, got = 0;
     for (int c = 0; c < 2; c++) {
+        /* made a double at a time, never copied whole: a box stored by parts
+         * and read back at once stalls on store forwarding */
         bsp_box gc;
-        int meets = 1, inside = 1;
         for (int k = 0; k < 3; k++) {
             gc.lo.v[k] = (unsigned)k == axis && c == 1 ? s - pad : cell->lo.v[k] - pad;
             gc.hi.v[k] = (unsigned)k == axis && c == 0 ? s + pad : cell->hi.v[k] + pad;
-            meets &= !(pb->lo.v[k] > gc.hi.v[k] || pb->hi.v[k] < gc.lo.v[k]);
-            inside &= pb->lo.v[k] >= gc.lo.v[k] && pb->hi.v[k] <= gc.hi.v[k];
         }
-        if (!meets)
+        if (!box_meets(pb, &gc))
             continue;
-        if (inside) {
-            for (int k = 0; k < 3; k++) {
-                out[c].lo.v[k] = pb->lo.v[k] - pad;
-                out[c].hi.v[k] = pb->hi.v[k] + pad;
-            }
+        if (box_inside(pb, &gc)) {
+            out[c] = box_grow(*pb, pad);
             got |= 1 << c;
             continue;
         }
@@ -681,7 +677,7 @@ int kd_clip_prim_split(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
         return clip_sphere_split(&scene->spheres[p->slot], &pb, cell, axis, s, pad, out);
     if ((shape_kind)p->shape == SHAPE_TRIANGLE) {
         bsp_box g = box_grow(*cell, pad);
-        if (box_is_empty(pb) || !box_meets(pb, &g))
+        if (box_is_empty(pb) || !box_meets(&pb, &g))
             return 0;
         const triangle_shape *tr = &scene->triangles[p->slot];
         bsp_vec3 vs[3] = {tr->v0, v3_add(tr->v0, tr->e1), v3_add(tr->v0, tr->e2)};
@@ -796,7 +792,7 @@ int kd_clip_split_part(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
         g.lo.v[k] = cell->lo.v[k] - pad;
         g.hi.v[k] = cell->hi.v[k] + pad;
     }
-    if (box_is_empty(pb) || !box_meets(pb, &g))
+    if (box_is_empty(pb) || !box_meets(&pb, &g))
         return 0;
     size_t n;
     const bsp_vec3 *cur;
@@ -828,7 +824,7 @@ int kd_clip_split_part(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
             gc.hi.v[axis] = cl;
         else
             gc.lo.v[axis] = cr;
-        if (box_inside(pb, &gc)) {
+        if (box_inside(&pb, &gc)) {
             out[c] = box_grow(pb, pad); /* the primitive lies inside the child: no part */
             got |= 1 << c;
             continue;
