@@ -2,14 +2,19 @@
  * test_sort.c — the builders' integer sort (src/util/sort.h) against qsort
  * on arrays that stress it: random keys with many or no repeats, sorted,
  * reversed, all equal, organ-pipe, and the lengths around its insertion
- * sort threshold; and the heapsort that bounds its worst case, alone.
+ * sort threshold; and the heapsort that bounds its worst case, alone. The
+ * radix sort of doubles (src/util/sort_doubles.h) against qsort on values of
+ * both signs, zeros of both signs, repeats, infinities and magnitudes from
+ * subnormal to huge.
  */
+#include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "harness.h"
 #include "util/sort.h"
+#include "util/sort_doubles.h"
 
 DEFINE_SORT(sort_u64_under_test, uint64_t, 24)
 
@@ -68,4 +73,57 @@ TEST(sort_heap_fallback_sorts)
         qsort(b, 1000, sizeof *b, cmp_u64);
         CHECK_MSG(!memcmp(a, b, sizeof a), "pattern %d", p);
     }
+}
+
+static int cmp_double(const void *x, const void *y)
+{
+    double a = *(const double *)x, b = *(const double *)y;
+    return (a > b) - (a < b);
+}
+
+/* A double of pattern P at I. */
+static double double_of(size_t i, size_t n, int p)
+{
+    uint64_t r = next_u64();
+    double u = (double)(r >> 11) / 9007199254740992.0; /* [0, 1) */
+    switch (p) {
+    case 0: return (u - 0.5) * 1e3;                           /* both signs */
+    case 1: return ldexp(u + 0.5, (int)(r % 2000) - 1000) * ((r >> 20) & 1 ? -1 : 1); /* magnitudes */
+    case 2: return (double)(r % 5) - 2.0;                    /* repeats, a zero */
+    case 3: return (r & 1) ? 0.0 : -0.0;                     /* zeros of both signs */
+    case 4: return (double)(n - i);                          /* reversed */
+    default: /* specials among ordinary values */
+        switch (r % 6) {
+        case 0: return INFINITY;
+        case 1: return -INFINITY;
+        case 2: return 4.9e-324;
+        case 3: return -4.9e-324;
+        default: return u;
+        }
+    }
+}
+
+TEST(sort_doubles_matches_qsort)
+{
+    const size_t lens[] = {0, 1, 2, 63, 64, 65, 1000, 30000};
+    double *a = malloc(30000 * sizeof *a), *b = malloc(30000 * sizeof *b);
+    uint64_t *tmp = malloc(30000 * sizeof *tmp);
+    REQUIRE(a && b && tmp);
+    for (size_t li = 0; li < sizeof lens / sizeof *lens; li++)
+        for (int p = 0; p < 6; p++) {
+            size_t n = lens[li];
+            for (size_t i = 0; i < n; i++)
+                a[i] = b[i] = double_of(i, n, p);
+            sort_doubles(a, n, tmp);
+            qsort(b, n, sizeof *b, cmp_double);
+            /* equal as values: -0 and +0 compare equal, and either sort
+             * may put them in either order */
+            int same = 1;
+            for (size_t i = 0; i < n; i++)
+                same &= a[i] == b[i];
+            CHECK_MSG(same, "length %zu, pattern %d", n, p);
+        }
+    free(a);
+    free(b);
+    free(tmp);
 }

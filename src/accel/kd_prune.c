@@ -51,7 +51,7 @@
 
 #include "accel/kd_prune.h"
 #include "util/bigmem.h"
-#include "util/sort.h"
+#include "util/sort_doubles.h"
 #include "util/sorted_count.h"
 
 /* The value of rank K (0-based) in A[0..N) sorted in decreasing order
@@ -227,12 +227,6 @@ int kd_prune_to_leaves(kd_tree *t, size_t max_leaves, double cut)
 
 /* --- the estimate of the threshold from a built sample ------------------------------------- */
 
-/* The savings ascending, inline comparisons: glibc's qsort with a call per
- * comparison was 6 % of the dragon's one-thread build (the values are
- * finite, so `<` is a total order up to the sign of zero, which no count
- * or threshold below tells apart). */
-DEFINE_SORT(sort_savings, double, 16)
-
 typedef struct estimate_sets {
     double *top, *exact, *pooled; /* sorted ascending */
     size_t ntop, nexact, npooled;
@@ -276,8 +270,11 @@ double kd_prune_estimate(const kd_tree *top, const kd_budget_part *parts, size_t
     double *m = bigmem_malloc(nodes * sizeof *m), *mtop = bigmem_malloc(top->nnodes * sizeof *mtop);
     double *buf = bigmem_malloc(values * sizeof *buf);
     double *chain = malloc((nunbuilt + 1) * 2 * sizeof *chain);
+    /* the radix sort's scratch, as long as the longest set (at most VALUES;
+     * the chains are fewer than the top's values) */
+    uint64_t *tmp = bigmem_malloc(values * sizeof *tmp);
     double theta = 0.0;
-    if (!m || !mtop || !buf || !chain)
+    if (!m || !mtop || !buf || !chain || !tmp)
         goto out;
     e.top = buf;
     e.ntop = chain_values(top, INFINITY, mtop, e.top);
@@ -297,7 +294,7 @@ double kd_prune_estimate(const kd_tree *top, const kd_budget_part *parts, size_t
     for (size_t i = 0; i < np; i++)
         if (!parts[i].sub)
             e.chain[e.nunbuilt++] = mtop[parts[i].node];
-    sort_savings(e.chain, e.nunbuilt);
+    sort_doubles(e.chain, e.nunbuilt, tmp);
     {
         /* each part's n at its chain's first place in the sorted array (parts
          * of equal chains share it), then suffix sums */
@@ -318,9 +315,9 @@ double kd_prune_estimate(const kd_tree *top, const kd_budget_part *parts, size_t
         theta = -INFINITY;
         goto out;
     }
-    sort_savings(e.top, e.ntop);
-    sort_savings(e.exact, e.nexact);
-    sort_savings(e.pooled, e.npooled);
+    sort_doubles(e.top, e.ntop, tmp);
+    sort_doubles(e.exact, e.nexact, tmp);
+    sort_doubles(e.pooled, e.npooled, tmp);
     /* the least candidate theta at which the estimate meets the budget: the
      * count changes only at the values (the chains are values of the top),
      * and it falls as theta grows, so a search of each sorted set finds its
@@ -345,5 +342,6 @@ out:
     free(mtop);
     free(buf);
     free(chain);
+    free(tmp);
     return theta;
 }
