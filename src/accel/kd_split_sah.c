@@ -93,6 +93,7 @@
  */
 #include <pthread.h>
 
+#include "accel/kd_merge.h"
 #include "accel/kd_prune.h"
 #include "accel/kd_sah.h"
 #include "util/grow.h"
@@ -272,58 +273,6 @@ static void set_parts(sah_build *b, size_t from, int c)
     }
 }
 
-/* Merges the sorted NEW[0..NN) into the sorted DST[0..A), in place from the
- * back (DST has room for A + NN). Few new keys (under 1/4 of the list): each
- * is placed by a galloping search back from the last placed one, and the
- * block of old keys above it moved at once — each old key moved once, as in
- * the plain merge, without a compare and branch per key. */
-static void merge_back(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn)
-{
-    if (nn * 4 < a) {
-        for (; nn > 0; nn--) {
-            const uint64_t x = nw[nn - 1];
-            size_t hi = a, step = 1; /* dst[hi..a) > x */
-            while (hi > 0 && dst[hi - 1] > x) {
-                size_t lo = hi > step ? hi - step : 0;
-                if (dst[lo] > x) {
-                    hi = lo;
-                    step *= 2;
-                    continue;
-                }
-                while (lo + 1 < hi) { /* dst[lo] < x < dst[hi] (keys are distinct) */
-                    size_t mid = lo + (hi - lo) / 2;
-                    if (dst[mid] > x)
-                        hi = mid;
-                    else
-                        lo = mid;
-                }
-                break;
-            }
-            size_t len = a - hi;
-            uint64_t *from = dst + hi, *to = dst + hi + nn;
-            if (len > 16)
-                memmove(to, from, len * sizeof *dst);
-            else
-                while (len-- > 0)
-                    to[len] = from[len];
-            dst[hi + nn - 1] = x;
-            a = hi;
-        }
-        return;
-    }
-    /* branch-free: which list gives the next key is unpredictable */
-    size_t o = a + nn;
-    while (nn > 0 && a > 0) {
-        const uint64_t x = dst[a - 1], y = nw[nn - 1];
-        const size_t from_old = x > y;
-        dst[--o] = from_old ? x : y;
-        a -= from_old;
-        nn -= from_old ^ 1;
-    }
-    while (nn > 0)
-        dst[--o] = nw[--nn];
-}
-
 /* Whether a node over CELL (N primitives, cost sum TSUM, after BAD bad
  * refines) is a leaf whatever the linear sweep finds, so that it need not
  * sweep: a split saves at most the cell's share of the root times TSUM less
@@ -453,7 +402,7 @@ static void sort_new_in_order(sah_build *b, uint64_t *nw, const uint64_t *both, 
     }
     sort_keys(moved, nmoved);
     memcpy(nw, same_run, same * sizeof *nw);
-    merge_back(nw, same, moved, nmoved);
+    kd_merge_back(nw, same, moved, nmoved);
 }
 
 /* Builds the subtree of NODE over CELL from the lists L; ev[top, ...) is
@@ -678,8 +627,8 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
                     sort_keys(nl_ev, 2 * kept[0]);
                     sort_keys(nr_ev, 2 * kept[1]);
                 }
-                merge_back(b->ev + LL.base + k * LL.stride, 2 * n_lonly, nl_ev, 2 * kept[0]);
-                merge_back(b->ev + RL.base + k * RL.stride, 2 * n_ronly, nr_ev, 2 * kept[1]);
+                kd_merge_back(b->ev + LL.base + k * LL.stride, 2 * n_lonly, nl_ev, 2 * kept[0]);
+                kd_merge_back(b->ev + RL.base + k * RL.stride, 2 * n_ronly, nr_ev, 2 * kept[1]);
             }
         }
         LL.n = n_lonly + kept[0];
