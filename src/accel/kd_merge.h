@@ -8,17 +8,19 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "scene/scene_internal.h" /* HIDDEN */
+
 /* Merges the sorted NW[0..NN) into the sorted DST[0..A), in place from the
  * back (DST has room for A + NN). The keys are distinct (event keys carry
  * their primitive). Picks the fastest of the ways below for the sizes. */
-void kd_merge_back(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn);
+HIDDEN void kd_merge_back(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn);
 
 /* The same by scalar code alone: a galloping search per new key when the
  * new keys are few, else a branch-free two-list merge. */
-void kd_merge_back_scalar(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn);
+HIDDEN void kd_merge_back_scalar(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn);
 
 /* The same by counted ranks (AVX2) when NN <= 8 and the CPU has AVX2;
  * returns 0, leaving DST as it was, where it cannot. */
-int kd_merge_back_ranked(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn);
+HIDDEN int kd_merge_back_ranked(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn);
 
 #endif

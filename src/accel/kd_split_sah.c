@@ -383,7 +383,7 @@ split_list(uint64_t *src, uint64_t *dst, uint64_t *both, size_t m, const uint8_t
  * of that axis in the lists' order, BOTH[0..NBOTH) (room for STRIDE more
  * after the three axes'). A new event equal to its old one keeps its place:
  * those, taken in the old order, are sorted already; only the others are
- * sorted, and merged into them (merge_back). */
+ * sorted, and merged into them (kd_merge_back). */
 static void sort_new_in_order(sah_build *b, uint64_t *nw, const uint64_t *both, size_t nboth,
                               size_t stride, int c)
 {
