@@ -634,3 +634,39 @@ TEST(cli_mixed_check_reports_the_tree_it_kept)
     CHECK_STR_CONTAINS(out, "expected surface, sampled or counted, got 'exact'");
     free(out);
 }
+
+/* bench, bench --paper and bench --scaling check every scene before the work
+ * on the first: a bad last scene ends the run at once with exit status 1, its
+ * message, and nothing on stdout (no table begun, no rows of the scenes
+ * before it). The good first scene, jacks, would take seconds. */
+TEST(cli_bench_checks_every_scene_first)
+{
+    static const char *const modes[] = {"", "--paper", "--scaling"};
+    static const struct {
+        const char *scene, *message;
+    } bad[] = {
+        {"spd:nosuch", "unknown SPD scene 'nosuch'"},
+        {"spd:tetra:99", "bad size factor '99'"},
+        {"spd:balls:2:t99", "bad tessellation 't99'"},
+        {"/nonexistent/scene.nff", "/nonexistent/scene.nff: cannot open"},
+        {"tests/data/nff_bad/binary_garbage.nff", "binary_garbage.nff"},
+    };
+    char cmd[1024];
+    for (size_t m = 0; m < sizeof modes / sizeof *modes; m++)
+        for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+            int st;
+            snprintf(cmd, sizeof cmd, "%s bench %s spd:jacks %s --quiet 2>/dev/null", harness_cli(),
+                     modes[m], bad[i].scene);
+            char *out = harness_run(cmd, &st);
+            REQUIRE(out);
+            CHECK_MSG(st == 1 && out[0] == '\0', "bench %s ... %s: exit %d, stdout '%.80s'",
+                      modes[m], bad[i].scene, st, out);
+            free(out);
+            snprintf(cmd, sizeof cmd, "%s bench %s spd:jacks %s --quiet 2>&1 >/dev/null",
+                     harness_cli(), modes[m], bad[i].scene);
+            out = harness_run(cmd, &st);
+            REQUIRE(out);
+            CHECK_STR_CONTAINS(out, bad[i].message);
+            free(out);
+        }
+}

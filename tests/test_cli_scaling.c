@@ -145,7 +145,7 @@ TEST(cli_bench_scaling_help_and_bad_arguments)
         const char *message;
     } bad[] = {
         {"spd:nosuchscene:3", 1, "unknown SPD scene 'nosuchscene'"},
-        {"spd:balls:2 spd:balls:99", 1, "size factor 99"},
+        {"spd:balls:2 spd:balls:99", 1, "size factor '99'"},
         {"spd:balls:2 /nonexistent/scene.nff", 1, "/nonexistent/scene.nff: cannot open"},
         {"spd:balls:2 --repeat 0", 2, "--repeat"},
         {"spd:balls:2 --repeat many", 2, "--repeat"},

@@ -6,7 +6,8 @@
  * scenes at other sizes against the MANIFEST formulas, error messages for
  * unknown names and bad sizes, the time to build ~6 * 10^5 spheres, and
  * tessellation (":tN"): counts, vertices on the surfaces, inscribed bounds,
- * hits near the true sphere, spec errors, text and scene bit for bit.
+ * hits near the true sphere, spec errors, text and scene bit for bit; and
+ * bsp_scene_check against bsp_scene_load.
  */
 #include <ctype.h>
 #include <stdio.h>
@@ -1318,4 +1319,54 @@ TEST(spd_tessellated_text_equals_generated_scene)
         bsp_scene_destroy(g);
         free(text);
     }
+}
+
+/* bsp_scene_check says what bsp_scene_load would, without the scene: the
+ * same status and message for every SPD spec (good and bad names, sizes,
+ * tessellations and their limit), and for files that cannot be opened or
+ * are directories; a readable file passes, malformed or not. */
+TEST(scene_check_agrees_with_scene_load)
+{
+    static const char *const specs[] = {
+        "spd:balls",        "spd:balls:1",       "spd:BALLS:2",     "spd:nosuch",
+        "spd:",             "spd:balls:0",       "spd:balls:99",    "spd:balls:x",
+        "spd:balls:2:t8",   "spd:balls:t8",      "spd:balls:2:t99", "spd:balls:2:tx",
+        "spd:balls:2:3",    "spd:tetra:13",      "spd:balls:6:t64", "spd:gears:1:t4",
+        "spd:balls:2:t8:x", "spd:balls:12345678901234567890123456789012345",
+        "tests/data/nff_good/comments.nff", "tests/data/nff_bad", "tests/nonexistent.nff",
+        "tests/nonexistent.ply.gz",
+    };
+    for (size_t i = 0; i < sizeof specs / sizeof *specs; i++) {
+        bsp_error ec, el;
+        memset(&ec, 0, sizeof ec);
+        memset(&el, 0, sizeof el);
+        bsp_status sc = bsp_scene_check(specs[i], &ec);
+        bsp_scene *s = NULL;
+        /* a large spec passes the check; loading it is not needed to agree */
+        int big = !strcmp(specs[i], "spd:tetra:13") || !strcmp(specs[i], "spd:balls:6:t64");
+        if (big) {
+            CHECK_MSG(sc == BSP_OK || sc == BSP_ERR_LIMIT, "%s: check gave %d", specs[i], (int)sc);
+            continue;
+        }
+        bsp_status sl = bsp_scene_load(specs[i], &s, &el);
+        bsp_scene_destroy(s);
+        if (sc != BSP_OK) {
+            CHECK_MSG(sl == sc && !strcmp(ec.message, el.message),
+                      "%s: check %d '%s', load %d '%s'", specs[i], (int)sc, ec.message, (int)sl,
+                      el.message);
+        } else {
+            /* passed: a load fails only on the file's content (no such spec
+             * here but the readable good file, which loads) */
+            CHECK_MSG(sl == BSP_OK, "%s: check passed, load gave %d '%s'", specs[i], (int)sl,
+                      el.message);
+        }
+    }
+    /* the check reads nothing of a file: a malformed one passes, and only
+     * the load refuses it */
+    bsp_error e;
+    bsp_scene *s = NULL;
+    CHECK_EQ_INT(bsp_scene_check("tests/data/nff_bad/binary_garbage.nff", &e), BSP_OK);
+    CHECK(bsp_scene_load("tests/data/nff_bad/binary_garbage.nff", &s, &e) != BSP_OK);
+    bsp_scene_destroy(s);
+    CHECK(bsp_scene_check(NULL, &e) != BSP_OK && e.message[0]);
 }

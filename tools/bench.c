@@ -629,7 +629,8 @@ int cmd_bench(int argc, char **argv)
         free(scenes);
         return EXIT_INPUT;
     }
-    if (plot_path && !output_path_writable(plot_path)) { /* before minutes of renders */
+    if ((plot_path && !output_path_writable(plot_path)) || /* before minutes of renders */
+        !scenes_loadable(scenes, nscenes)) {
         free(rows);
         free(scenes);
         return EXIT_INPUT;

@@ -374,47 +374,6 @@ static int write_plot(const char *path, const scaling_row *rows, int nrows)
     return rc;
 }
 
-/* Before a run of minutes: is SCENE an SPD scene of a known name and size
- * factor, or a file that loads? 1, or 0 with a message. A file is loaded
- * and freed again (the run loads one scene at a time, to keep the memory of
- * one), so that a malformed file is reported before the first build, not
- * after the scenes before it; the loader checks an SPD scene's ":tN" suffix
- * when its turn comes. */
-static int scene_looks_loadable(const char *scene)
-{
-    if (strncmp(scene, "spd:", 4) == 0) {
-        char name[64];
-        const char *rest = scene + 4;
-        size_t len = strcspn(rest, ":");
-        snprintf(name, sizeof name, "%.*s", (int)(len < sizeof name ? len : sizeof name - 1),
-                 rest);
-        int lo = 0, hi = 0;
-        if (len >= sizeof name || !bsp_spd_scene_sizes(name, NULL, &lo, &hi)) {
-            fprintf(stderr, "%s: %s: unknown SPD scene '%s' (known scenes: %s)\n", prog, scene,
-                    name, bsp_spd_scene_names());
-            return 0;
-        }
-        if (rest[len] == ':' && rest[len + 1] >= '0' && rest[len + 1] <= '9') {
-            char *end;
-            long size = strtol(rest + len + 1, &end, 10);
-            if ((*end == 0 || *end == ':') && (size < lo || size > hi)) {
-                fprintf(stderr, "%s: %s: size factor %ld outside %d..%d of '%s'\n", prog, scene,
-                        size, lo, hi, name);
-                return 0;
-            }
-        }
-        return 1;
-    }
-    bsp_scene *s = NULL;
-    bsp_error err;
-    if (bsp_scene_load(scene, &s, &err) != BSP_OK) {
-        fprintf(stderr, "%s: %s\n", prog, err.message);
-        return 0;
-    }
-    bsp_scene_destroy(s);
-    return 1;
-}
-
 int bench_scaling(int argc, char **argv)
 {
     args a = {argc, 1, argv, scaling_usage, NULL};
@@ -463,11 +422,10 @@ int bench_scaling(int argc, char **argv)
         return EXIT_INPUT;
     }
     nscenes = bench_scenes_or_defaults(scenes, nscenes, bench_scaling_default_scenes);
-    for (int s = 0; s < nscenes; s++)
-        if (!scene_looks_loadable(scenes[s])) {
-            free(scenes);
-            return EXIT_INPUT;
-        }
+    if (!scenes_loadable(scenes, nscenes)) {
+        free(scenes);
+        return EXIT_INPUT;
+    }
     scaling_row *rows = calloc((size_t)nscenes * (size_t)o.nkinds, sizeof *rows);
     if (!rows) {
         fprintf(stderr, "%s: out of memory\n", prog);

@@ -111,6 +111,26 @@ bsp_scene *load_scene(const char *path)
     return scene;
 }
 
+int scenes_loadable(const char *const *scenes, int n)
+{
+    for (int i = 0; i < n; i++) {
+        bsp_error err;
+        bsp_status st;
+        if (strncmp(scenes[i], "spd:", 4) == 0) {
+            st = bsp_scene_check(scenes[i], &err);
+        } else {
+            bsp_scene *s = NULL;
+            st = bsp_scene_load(scenes[i], &s, &err);
+            bsp_scene_destroy(s);
+        }
+        if (st != BSP_OK) {
+            fprintf(stderr, "%s: %s\n", prog, err.message);
+            return 0;
+        }
+    }
+    return 1;
+}
+
 /* The build's progress bar, drawn only for a build that takes more than
  * half a second (most take less), on a terminal. A second tree (sah-mixed's
  * check) restarts the count, so the bar shows the most reported. */

@@ -95,6 +95,14 @@ void apply_view_args(bsp_scene *scene, const char *path, const view_args *v,
 
 /* Loads PATH (printing its warnings) or exits 1 with the message. */
 bsp_scene *load_scene(const char *path);
+
+/* Before a run of minutes over several scenes: whether each of SCENES[0..N)
+ * will load, 1, or 0 after a message naming the first that will not. An SPD
+ * scene's name, size and tessellation are checked (bsp_scene_check); a file
+ * is loaded and freed again (a run loads one scene at a time, to hold the
+ * memory of one), so that a malformed last file is reported before the work
+ * on the first, not after it. */
+int scenes_loadable(const char *const *scenes, int n);
 /* Builds or exits 1 with the message. */
 bsp_accel *build_accel(const bsp_scene *scene, const bsp_build_options *opts);
 /* The help line of --tree, and the structure a command works on: the tree

@@ -585,6 +585,10 @@ int bench_paper(int argc, char **argv)
         return EXIT_INPUT;
     }
     nscenes = bench_scenes_or_defaults(scenes, nscenes, bench_default_scenes);
+    if (!scenes_loadable(scenes, nscenes)) {
+        free(scenes);
+        return EXIT_INPUT;
+    }
     FILE *csv = NULL;
     if (csv_path && !(csv = fopen(csv_path, "w"))) {
         fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, csv_path, strerror(errno));

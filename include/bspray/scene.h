@@ -62,6 +62,15 @@ typedef struct bsp_light {
  * bsp_scene_destroy). On failure *OUT is NULL and ERR names FILE:LINE. */
 bsp_status bsp_scene_load(const char *path, bsp_scene **out, bsp_error *err);
 
+/* Checks at once, without reading or generating the scene, what
+ * bsp_scene_load can know before it does: for "spd:NAME[:SIZE][:tN]" the
+ * name, the size and the tessellation; for a file that it opens for reading,
+ * is no directory and is within the readers' size limit. BSP_OK, or the
+ * error bsp_scene_load would give for those; a file that passes may still
+ * hold a malformed scene. For a tool that loads several scenes in turn: a
+ * mistyped last name is found before the work on the first. */
+bsp_status bsp_scene_check(const char *path, bsp_error *err);
+
 /* The same from a memory buffer of LEN bytes (plain or gzip); NAME is used in
  * messages. The buffer is not kept. */
 bsp_status bsp_scene_load_nff_memory(const char *buf, size_t len, const char *name,

@@ -5,8 +5,10 @@
  * Wavefront OBJ or PLY mesh (src/scene/obj.c, ply.c); anything else is read
  * as NFF. Every reader inflates gzip input, detected by content (gunzip.c).
  */
+#include <stdio.h>
 #include <string.h>
 
+#include "scene/mesh.h"
 #include "scene/scene_internal.h"
 #include "spd/spd.h"
 
@@ -37,4 +39,16 @@ bsp_status bsp_scene_load(const char *path, bsp_scene **out, bsp_error *err)
     if (path && (has_extension(path, ".ply") || has_extension(path, ".ply.gz")))
         return ply_load_file(path, out, err);
     return nff_load_file(path, out, err);
+}
+
+bsp_status bsp_scene_check(const char *path, bsp_error *err)
+{
+    if (path && strncmp(path, "spd:", 4) == 0)
+        return spd_spec_check(path, err);
+    FILE *fp;
+    size_t cap;
+    bsp_status st = mesh_open_file(path, &fp, &cap, err);
+    if (st == BSP_OK)
+        fclose(fp);
+    return st;
 }

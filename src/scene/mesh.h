@@ -12,6 +12,7 @@
 #define BSPRAY_SCENE_MESH_H
 
 #include <stddef.h>
+#include <stdio.h>
 
 #include "bspray/error.h"
 #include "bspray/scene.h"
@@ -46,6 +47,11 @@ HIDDEN int mesh_parse_integer(const char *s, size_t len, long long *out);
 /* S[0..LEN) quoted for a message ('...'), unprintable bytes as \xNN, long
  * tokens cut; "end of line" when S is NULL. Returns BUF. */
 HIDDEN const char *mesh_show_token(const char *s, size_t len, char *buf, size_t size);
+
+/* Opens PATH for reading (*FP; *CAP: a buffer size that holds a regular
+ * file whole, plus one byte), refusing a directory and a regular file larger
+ * than MESH_MAX_INPUT. Errors are "PATH: ...". */
+HIDDEN bsp_status mesh_open_file(const char *path, FILE **fp, size_t *cap, bsp_error *err);
 
 /* Reads the whole file PATH into *OUT (free with free()); files larger than
  * MESH_MAX_INPUT are refused before reading. Errors are "PATH: ...". */

@@ -243,8 +243,11 @@ const char *mesh_show_token(const char *s, size_t len, char *buf, size_t size)
     return buf;
 }
 
-bsp_status mesh_read_file(const char *path, char **out, size_t *outlen, bsp_error *err)
+bsp_status mesh_open_file(const char *path, FILE **fp_out, size_t *cap_out, bsp_error *err)
 {
+    *fp_out = NULL;
+    if (!path)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "no scene file given");
     FILE *fp = fopen(path, "rb");
     if (!fp)
         return error_set(err, BSP_ERR_IO, path, 0, "cannot open: %s", strerror(errno));
@@ -264,6 +267,18 @@ bsp_status mesh_read_file(const char *path, char **out, size_t *outlen, bsp_erro
             cap = (size_t)st.st_size + 1; /* +1: end of file seen without a regrow */
         }
     }
+    *fp_out = fp;
+    *cap_out = cap;
+    return BSP_OK;
+}
+
+bsp_status mesh_read_file(const char *path, char **out, size_t *outlen, bsp_error *err)
+{
+    FILE *fp;
+    size_t cap;
+    bsp_status opened = mesh_open_file(path, &fp, &cap, err);
+    if (opened != BSP_OK)
+        return opened;
     char *buf = malloc(cap);
     size_t used = 0;
     if (!buf) {

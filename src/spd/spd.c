@@ -394,11 +394,13 @@ static int parse_tess(const char *text, spd_tess *t)
            spd_tess_init(t, level);
 }
 
-bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error *err)
+/* Parses SPEC ("spd:NAME[:SIZE][:tN]") into its entry, size and
+ * tessellation (*TP: TESS, or NULL for none), and checks that the scene it
+ * names may be built (the size's range, the tessellated size's limit). */
+static bsp_status parse_spec(const char *spec, const spd_entry **entry, int *size_out,
+                             spd_tess *tess, const spd_tess **tp_out, bsp_error *err)
 {
-    if (out)
-        *out = NULL;
-    if (!spec || !out)
+    if (!spec)
         return error_set(err, BSP_ERR_INVALID, NULL, 0, "spd: no scene specification given");
     if (strncmp(spec, "spd:", 4) != 0)
         return error_set(err, BSP_ERR_INVALID, NULL, 0,
@@ -413,7 +415,6 @@ bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error 
         return unknown_name(err, name, len);
     /* up to two fields after the name: SIZE, tN, or SIZE:tN */
     int size = e->def;
-    spd_tess tess;
     const spd_tess *tp = NULL;
     if (colon) {
         const char *field = colon + 1, *next = strchr(field, ':');
@@ -429,15 +430,42 @@ bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error 
                 next++;
         }
         if (next) {
-            if (!parse_tess(next, &tess))
+            if (!parse_tess(next, tess))
                 return bad_tess(err, e, next);
-            tp = &tess;
+            tp = tess;
         }
     }
-
     bsp_status big = check_tess_size(e, size, tp, err);
     if (big != BSP_OK)
         return big;
+    *entry = e;
+    *size_out = size;
+    *tp_out = tp;
+    return BSP_OK;
+}
+
+bsp_status spd_spec_check(const char *spec, bsp_error *err)
+{
+    const spd_entry *e;
+    int size;
+    spd_tess tess;
+    const spd_tess *tp;
+    return parse_spec(spec, &e, &size, &tess, &tp, err);
+}
+
+bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out, bsp_error *err)
+{
+    if (out)
+        *out = NULL;
+    if (!out)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "spd: no scene specification given");
+    const spd_entry *e;
+    int size;
+    spd_tess tess;
+    const spd_tess *tp;
+    bsp_status st = parse_spec(spec, &e, &size, &tess, &tp, err);
+    if (st != BSP_OK)
+        return st;
     bsp_scene *scene = bsp_scene_create();
     if (!scene)
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "spd:%s: out of memory", e->name);

@@ -238,4 +238,8 @@ SPD_HIDDEN void spd_gen_nurbtst(int size, spd_sink *out);
 SPD_HIDDEN bsp_status spd_scene_generate_spec(const char *spec, bsp_scene **out,
                                               bsp_error *err);
 
+/* The checks of spd_scene_generate_spec without the scene: BSP_OK when SPEC
+ * names a scene it would build, else its error. */
+SPD_HIDDEN bsp_status spd_spec_check(const char *spec, bsp_error *err);
+
 #endif /* BSPRAY_SPD_H */
