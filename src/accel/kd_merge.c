@@ -52,8 +52,8 @@ merge_ranked_avx2(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn)
 
 int kd_merge_back_ranked(uint64_t *dst, size_t a, const uint64_t *nw, size_t nn)
 {
-    if (nn > MERGE_RANKED_MAX || !__builtin_cpu_supports("avx2") ||
-        !__builtin_cpu_supports("popcnt"))
+    /* every CPU with AVX2 has POPCNT (Haswell, Excavator and later) */
+    if (nn > MERGE_RANKED_MAX || !__builtin_cpu_supports("avx2"))
         return 0;
     merge_ranked_avx2(dst, a, nw, nn);
     return 1;
