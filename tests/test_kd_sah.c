@@ -1640,7 +1640,7 @@ TEST(sah_build_is_deterministic)
 }
 
 /* The cost model does not follow the traversal's mailboxes: without them
- * the builder keeps the mailbox term (docs/kdtree.md, "Session 25"), so
+ * the builder keeps the mailbox term (docs/kdtree-log.md, "Session 25"), so
  * --mailbox off builds the very tree of --mailbox on, and only
  * sah_straddle_twice (MacDonald and Booth's plain model) builds another. On
  * shells:2 (721 nested, overlapping spheres) the plain model stops early —

@@ -41,7 +41,7 @@ const char *const bench_scaling_default_scenes[] = {
  * build of a large scene writes 100-200 MB it never wrote before, and on a
  * virtual machine the system time of that first touch swings from 0.02 to
  * 0.2 s between identical runs (balls:6, whose build's user time stays at
- * 0.52-0.55 s; docs/kdtree.md, "Session 34"), so a single build measures
+ * 0.52-0.55 s; docs/kdtree-log.md, "Session 34"), so a single build measures
  * the host as much as the builder. */
 #define SCALING_BIG_PRIMS 500000
 #define SCALING_BIG_REPEAT 2

@@ -105,7 +105,7 @@ void kd_cost_resolve(const bsp_build_options *o, kd_cost_model *m)
         bc = KD_DEFAULT_BUDGET_CUT;
     m->budget_cut = bc > 0.0 ? fmin(bc, 1e6) : 0.0;
     /* not O->mailbox: the mailbox term's trees are faster without mailboxes
-     * too (shells 2.6x; docs/kdtree.md, "Session 25") */
+     * too (shells 2.6x; docs/kdtree-log.md, "Session 25") */
     m->mailbox_term = !o->sah_straddle_twice;
     m->mailbox_hit = KD_MAILBOX_HIT_COST * m->c.traversal;
 }

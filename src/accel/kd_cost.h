@@ -67,7 +67,7 @@ HIDDEN void kd_cost_defaults(bsp_sah_costs *c);
  * within 0.76-1.01 of the threshold (session 20). None of 23 large scenes
  * was built twice at 0.75, nor of 33 at 0.8; at 1.0 three of 21 were, and
  * at 0.95 one (session 34). 0.75 keeps a third of margin and builds the same
- * trees 4-16 % faster than 0.5 (docs/kdtree.md, "Session 34"). */
+ * trees 4-16 % faster than 0.5 (docs/kdtree-log.md, "Session 34"). */
 #define KD_DEFAULT_BUDGET_CUT 0.75
 /* A test skipped by the mailbox (one stamp load and compare; often a cache
  * miss) in units of C_trav: about 2 ns against 13 ns per traversal step. */

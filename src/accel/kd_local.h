@@ -14,7 +14,7 @@
  * Primary rays per second on the Stanford dragon (47,794 / 202,520 /
  * 871,414 triangles), against the scene's records: 1.07x / 1.13-1.24x /
  * 1.24-1.36x; SPD scenes of about 10^4 primitives within noise
- * (docs/kdtree.md, "Session 22").
+ * (docs/kdtree-log.md, "Session 22").
  *
  * Exactness: a record holds a bit-for-bit copy of the shape's data and the
  * kernel is the same function, so every t is the one the naive method

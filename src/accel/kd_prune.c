@@ -7,7 +7,7 @@
  * read. On large meshes that makes trees of 5-13 leaves per primitive whose
  * deepest splits save almost nothing, and a tree of 10^6 nodes no longer
  * fits in the caches: teapot:60 renders 10 % faster with a third of its
- * leaves (docs/kdtree.md, session 19). A least saving per split
+ * leaves (docs/kdtree-log.md, session 19). A least saving per split
  * (sah_min_saving) prunes the same splits, but one threshold for every
  * scene is too much for some (tree: its ground polygon dominates the root
  * box, so the plant's cells look cheap) and too little for others; the
@@ -39,7 +39,7 @@
  * splits the prune will remove: it estimates theta from the top of the tree
  * and a sample of its subtrees, builds the rest without the splits saving
  * less than a share of the estimate, and kd_prune_to_leaves then checks
- * that this cut lay below theta (docs/kdtree.md, session 20).
+ * that this cut lay below theta (docs/kdtree-log.md, session 20).
  *
  * Children always have larger indices than their parent (the builder and
  * the splice of parallel subtrees allocate pairs after their parent), so

@@ -171,7 +171,7 @@ static int reserve_events(sah_build *w, size_t need)
  * stays from task to task: memory the thread has written before. On the VM
  * the benchmarks run on, the kernel's zeroing of fresh pages made a stack per
  * task cost balls:6's first build 0.67 s against 0.59 s on average
- * (docs/kdtree.md, "Session 29"). */
+ * (docs/kdtree-log.md, "Session 29"). */
 static void run_task(sah_build *w, sah_task *tk)
 {
     kd_tree *sub = &tk->sub;

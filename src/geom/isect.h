@@ -140,7 +140,7 @@ ISECT_INLINE int sphere_isect(const sphere_shape *s, const isect_ray *ray, doubl
  * predictor can learn; testing u first saved a cross product on a miss but
  * cost a misprediction on about every other test. Same values, so the same
  * bits: primary rays per second +15 % on the Stanford dragon (202,520
- * triangles), +0-10 % on teapot:60 (docs/kdtree.md, "Session 22"). */
+ * triangles), +0-10 % on teapot:60 (docs/kdtree-log.md, "Session 22"). */
 ISECT_INLINE int triangle_solve(const triangle_edges *tr, const isect_ray *ray, bsp_vec3 org,
                                 double ts, const int shifted, double tmax, double *t,
                                 double *bu_out, double *bv_out, double *det_out)

@@ -5,7 +5,7 @@
  * stack alone reaches 80 MB), and on 4 KiB pages each page costs a page fault
  * when first written and a TLB entry while it is read: on the VM the
  * benchmarks run on that was a fifth to a third of a one-thread build's
- * CPU time (docs/kdtree.md, "Session 21: the build on huge pages"). bigmem_advise asks
+ * CPU time (docs/kdtree-log.md, "Session 21: the build on huge pages"). bigmem_advise asks
  * the kernel for 2 MiB pages on an array's aligned interior where the system
  * offers them (Linux madvise MADV_HUGEPAGE, which "madvise" mode of
  * transparent_hugepage honours); elsewhere, and for arrays under 2 MiB, it
