@@ -290,6 +290,157 @@ TEST(cli_stats_of_a_tree)
     free(out);
 }
 
+/* The member KEY of the JSON text J (its first occurrence, as the writers
+ * print them: "KEY": VALUE) as text, or NULL. */
+static const char *json_member(const char *j, const char *key)
+{
+    char pat[128];
+    snprintf(pat, sizeof pat, "\"%s\": ", key);
+    const char *p = strstr(j, pat);
+    return p ? p + strlen(pat) : NULL;
+}
+
+static double json_num(const char *j, const char *key)
+{
+    const char *v = json_member(j, key);
+    return v ? strtod(v, NULL) : -1.0;
+}
+
+static char *read_text(const char *path)
+{
+    size_t len;
+    return (char *)harness_read_file(path, &len);
+}
+
+/* stats --stats-json, and the tree figures render and trace add to theirs:
+ * every figure is the library's for the same scene and options
+ * (bsp_accel_tree_stats of a build in this process: the build makes the same
+ * tree on any number of threads), the numbers read back bit for bit, and
+ * every file is JSON (python3's parser, where there is one). */
+TEST(cli_stats_json_matches_the_library)
+{
+    const char *spec = "spd:tree:5";
+    bsp_scene *scene;
+    bsp_error err;
+    REQUIRE(bsp_scene_load(spec, &scene, &err) == BSP_OK);
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    bsp_accel *accel;
+    REQUIRE(bsp_accel_build(scene, &o, &accel, &err) == BSP_OK);
+    bsp_tree_stats t;
+    bsp_accel_tree_stats(accel, &t);
+    bsp_accel_destroy(accel);
+    char digest[32];
+    snprintf(digest, sizeof digest, "\"%016llx\"", (unsigned long long)t.digest);
+
+    char sj[512], rj[512], tj[512], img[512], rays[512], cmd[4096];
+    harness_tmp_path(sj, sizeof sj, "stats.json");
+    harness_tmp_path(rj, sizeof rj, "render.json");
+    harness_tmp_path(tj, sizeof tj, "trace.json");
+    harness_tmp_path(img, sizeof img, "stats_json.png");
+    harness_tmp_path(rays, sizeof rays, "stats_json");
+    snprintf(cmd, sizeof cmd, "%s stats %s --accel sah --check --stats-json %s", harness_cli(),
+             spec, sj);
+    int st;
+    char *out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    free(out);
+    char *j = read_text(sj);
+    REQUIRE(j);
+    CHECK_EQ_INT((long)json_num(j, "primitives"), (long)bsp_scene_prim_count(scene));
+    for (int k = 0; k < BSP_PRIM_KIND_COUNT; k++)
+        CHECK_EQ_INT((long)json_num(j, bsp_prim_kind_name((bsp_prim_kind)k)),
+                     (long)bsp_scene_kind_count(scene, (bsp_prim_kind)k));
+    bsp_box b = bsp_scene_bounds(scene);
+    const char *mn = json_member(j, "min"), *mx = json_member(j, "max");
+    double v[6];
+    REQUIRE(mn && mx && sscanf(mn, "[%lf, %lf, %lf]", &v[0], &v[1], &v[2]) == 3 &&
+            sscanf(mx, "[%lf, %lf, %lf]", &v[3], &v[4], &v[5]) == 3);
+    CHECK(v[0] == b.lo.x && v[1] == b.lo.y && v[2] == b.lo.z);
+    CHECK(v[3] == b.hi.x && v[4] == b.hi.y && v[5] == b.hi.z); /* bit for bit */
+    CHECK_EQ_INT((long)json_num(j, "N_IN"), (long)t.interior_nodes);
+    CHECK_EQ_INT((long)json_num(j, "N_V"), (long)t.leaves);
+    CHECK_EQ_INT((long)json_num(j, "N_EV"), (long)t.empty_leaves);
+    CHECK_EQ_INT((long)json_num(j, "N_OIV"), (long)t.references);
+    CHECK_EQ_INT((long)json_num(j, "leaf_depth_max"), (long)t.max_leaf_depth);
+    CHECK(json_num(j, "leaf_depth_mean") == t.avg_leaf_depth);
+    CHECK(json_num(j, "expected_cost") == t.expected_cost);
+    CHECK(json_num(j, "model_cost") == t.model_cost);
+    CHECK_EQ_INT((long)json_num(j, "tree_bytes"), (long)t.bytes);
+    CHECK_STR_CONTAINS(j, digest);
+    CHECK_STR_CONTAINS(j, "\"invariants\": \"ok\"");
+    CHECK_STR_CONTAINS(j, "\"accel\": \"sah\"");
+    free(j);
+
+    /* render and trace: the same figures of the same tree */
+    snprintf(cmd, sizeof cmd, "%s render %s --res 9 --quiet --save-rays %s --stats-json %s -o %s",
+             harness_cli(), spec, rays, rj, img);
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    free(out);
+    snprintf(cmd, sizeof cmd, "%s trace %s --rays %s-primary.txt --stats-json %s", harness_cli(),
+             spec, rays, tj);
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    free(out);
+    const char *files[2] = {rj, tj};
+    for (int i = 0; i < 2; i++) {
+        j = read_text(files[i]);
+        REQUIRE(j);
+        CHECK_STR_CONTAINS(j, digest);
+        CHECK_EQ_INT((long)json_num(j, "N_V"), (long)t.leaves);
+        CHECK_EQ_INT((long)json_num(j, "N_OIV"), (long)t.references);
+        CHECK(json_num(j, "expected_cost") == t.expected_cost);
+        free(j);
+    }
+
+    /* the naive method has no digest; no structure, no structure member */
+    char nj[512], sc[512];
+    harness_tmp_path(nj, sizeof nj, "naive.json");
+    harness_tmp_path(sc, sizeof sc, "scene.json");
+    snprintf(cmd, sizeof cmd, "%s stats %s --accel naive --stats-json %s && %s stats %s --stats-json %s",
+             harness_cli(), spec, nj, harness_cli(), spec, sc);
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    free(out);
+    j = read_text(nj);
+    REQUIRE(j);
+    CHECK_STR_CONTAINS(j, "\"digest\": null");
+    free(j);
+    j = read_text(sc);
+    REQUIRE(j);
+    CHECK_MSG(!strstr(j, "structure") && json_member(j, "materials"), "%s", j);
+    free(j);
+
+    /* valid JSON, by a parser of its own */
+    snprintf(cmd, sizeof cmd,
+             "python3 -c 'import json,sys; [json.load(open(a)) for a in sys.argv[1:]]' %s %s %s %s "
+             "%s 2>&1",
+             sj, rj, tj, nj, sc);
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    if (st == 127)
+        printf("  python3 not found: the files' JSON syntax is not checked\n");
+    else
+        CHECK_MSG(st == 0, "a JSON file does not parse: %s", out);
+    free(out);
+
+    /* an unwritable file: exit 1 before anything is loaded or printed */
+    snprintf(cmd, sizeof cmd, "%s stats %s --accel sah --stats-json %s/no/such/dir/x.json 2>&1",
+             harness_cli(), spec, harness_tmpdir());
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 1);
+    CHECK_STR_CONTAINS(out, "x.json: cannot open for writing");
+    CHECK_MSG(!strstr(out, "primitives:"), "stats printed before failing:\n%s", out);
+    free(out);
+    bsp_scene_destroy(scene);
+}
+
 TEST(cli_gen_round_trip)
 {
     char path[512], cmd[2048];

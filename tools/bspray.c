@@ -201,7 +201,7 @@ static void json_class(FILE *f, const char *name, const bsp_ray_class_stats *c, 
             safe_div((double)c->traversal_steps, (double)c->rays), last ? "" : ",");
 }
 
-static int write_stats_json(const char *path, const char *scene_name, const char *accel_name,
+static int write_stats_json(const char *path, const char *scene_name, bsp_accel_kind kind,
                             const bsp_render_stats *st, const bsp_tree_stats *tree,
                             const bsp_mixed_check *chk, const char *tree_path)
 {
@@ -216,8 +216,8 @@ static int write_stats_json(const char *path, const char *scene_name, const char
     uint64_t tests = P->isect_tests + S->isect_tests + R->isect_tests;
     fprintf(f, "{\n  \"scene\": ");
     json_string(f, scene_name);
-    fprintf(f, ",\n  \"accel\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n", accel_name,
-            st->width, st->height);
+    fprintf(f, ",\n  \"accel\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n",
+            bsp_accel_kind_name(kind), st->width, st->height);
     fprintf(f, "  \"max_depth\": %d,\n  \"threads\": %d,\n", st->max_depth, st->threads);
     fprintf(f, "  \"PrimaryRay\": %" PRIu64 ",\n  \"UsedIntPrimRay\": %" PRIu64 ",\n", P->rays,
             P->hits);
@@ -239,13 +239,8 @@ static int write_stats_json(const char *path, const char *scene_name, const char
             safe_div((double)steps, (double)all), safe_div((double)ets, (double)all),
             safe_div((double)eets, (double)all));
     fprintf(f, "  \"mailbox_hits\": %" PRIu64 ",\n", mb);
-    fprintf(f,
-            "  \"N_IN\": %" PRIu64 ",\n  \"N_V\": %" PRIu64 ",\n  \"N_EV\": %" PRIu64
-            ",\n  \"N_OIV\": %" PRIu64 ",\n  \"tree_bytes\": %" PRIu64
-            ",\n  \"trace_bytes\": %" PRIu64 ",\n",
-            tree->interior_nodes, tree->leaves, tree->empty_leaves, tree->references,
-            tree->bytes, tree->trace_bytes);
-    tree_time_json(f, tree_path, st->build_seconds);
+    tree_stats_json(f, "  ", tree, kind);
+    tree_time_json(f, "  ", tree_path, st->build_seconds);
     fprintf(f, "  \"T_TR\": %.6f,\n", st->render_seconds);
     if (chk->ran)
         fprintf(f,
@@ -400,7 +395,8 @@ static int cmd_render(int argc, char **argv)
             print_stats_table(stdout, scene_path, an, &st, ropts.sampling, &tree, &chk,
                               tree_path);
         if (json_path &&
-            !write_stats_json(json_path, scene_path, an, &st, &tree, &chk, tree_path))
+            !write_stats_json(json_path, scene_path, bsp_accel_get_kind(accel), &st, &tree, &chk,
+                             tree_path))
             rc = EXIT_INPUT;
         if (costs) {
             bsp_image *map = costmap_draw(costs, cost_w, cost_h, cost_measure);
@@ -427,8 +423,8 @@ static int cmd_render(int argc, char **argv)
 
 static const char stats_usage[] =
     "bspray stats SCENE [--accel METHOD] [--max-depth N] [--leaf-size N] [--tree FILE]\n"
-    "                   [--check] [--eye X,Y,Z] [--at X,Y,Z | --dir X,Y,Z] [--up X,Y,Z]\n"
-    "                   [--fov DEG] [--ortho W|auto]";
+    "                   [--check] [--stats-json FILE] [--eye X,Y,Z] [--at X,Y,Z | --dir X,Y,Z]\n"
+    "                   [--up X,Y,Z] [--fov DEG] [--ortho W|auto]";
 static const char stats_help[] =
     "Print what SCENE contains: primitives by kind (with polygon vertex counts), bounds,\n"
     "camera, lights, materials, background, and load warnings. With --accel, also build\n"
@@ -437,12 +433,66 @@ static const char stats_help[] =
     "SAH cost with unit costs and under the build's own costs, build time T_B). With\n"
     "--tree, the same figures of a saved tree (bspray build), and its load time.\n"
     "\n"
-    "  --check            run the tree invariant checker too\n";
+    "  --check            run the tree invariant checker too\n"
+    "  --stats-json FILE  also write the figures as JSON: the primitives by kind, the\n"
+    "                     bounds and, with a structure, T_B (or the file and T_load),\n"
+    "                     N_IN, N_V, N_EV, N_OIV, leaf depths, bytes, both expected\n"
+    "                     costs, the leaf budget's cut, the digest and the check\n";
+
+/* The figures stats prints, as JSON in PATH: the scene's, and with ACCEL (or
+ * NULL) the structure's; CHECKED: 0 no check, 1 passed, -1 failed. 0 (with a
+ * message) when PATH cannot be written. */
+static int write_scene_stats_json(const char *path, const char *scene_path, const bsp_scene *scene,
+                                  const bsp_accel *accel, const char *tree_path, int checked)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) {
+        fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, path, strerror(errno));
+        return 0;
+    }
+    fprintf(f, "{\n  \"scene\": ");
+    json_string(f, scene_path);
+    fprintf(f, ",\n  \"primitives\": %zu,\n  \"kinds\": {", bsp_scene_prim_count(scene));
+    for (int k = 0; k < BSP_PRIM_KIND_COUNT; k++)
+        fprintf(f, "%s\"%s\": %zu", k ? ", " : "", bsp_prim_kind_name((bsp_prim_kind)k),
+                bsp_scene_kind_count(scene, (bsp_prim_kind)k));
+    bsp_box b = bsp_scene_bounds(scene);
+    fprintf(f, "},\n  \"bounds\": ");
+    if (b.lo.x <= b.hi.x) {
+        const double v[6] = {b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z};
+        for (int i = 0; i < 6; i++) {
+            fputs(i == 0 ? "{\"min\": [" : i == 3 ? "], \"max\": [" : ", ", f);
+            json_real(f, v[i]);
+        }
+        fputs("]}", f);
+    } else {
+        fputs("null", f); /* no primitive */
+    }
+    fprintf(f, ",\n  \"lights\": %zu,\n  \"materials\": %zu", bsp_scene_light_count(scene),
+            bsp_scene_material_count(scene));
+    if (accel) {
+        bsp_tree_stats t;
+        bsp_accel_tree_stats(accel, &t);
+        bsp_accel_kind kind = bsp_accel_get_kind(accel);
+        fprintf(f, ",\n  \"structure\": {\n");
+        tree_time_json(f, "    ", tree_path, bsp_accel_build_seconds(accel));
+        tree_stats_json(f, "    ", &t, kind);
+        if (checked)
+            fprintf(f, "    \"invariants\": \"%s\",\n", checked > 0 ? "ok" : "failed");
+        fprintf(f, "    \"accel\": \"%s\"\n  }", bsp_accel_kind_name(kind));
+    }
+    fputs("\n}\n", f);
+    if (fclose(f) != 0) {
+        fprintf(stderr, "%s: %s: write failed: %s\n", prog, path, strerror(errno));
+        return 0;
+    }
+    return 1;
+}
 
 static int cmd_stats(int argc, char **argv)
 {
     args a = {argc, 1, argv, stats_usage, NULL};
-    const char *scene_path = NULL, *tree_path = NULL;
+    const char *scene_path = NULL, *tree_path = NULL, *json_path = NULL;
     int want_tree = 0, check = 0;
     view_args view = {0};
     bsp_build_options bopts;
@@ -459,6 +509,8 @@ static int cmd_stats(int argc, char **argv)
             continue;
         } else if (!strcmp(s, "--check")) {
             check = 1;
+        } else if (!strcmp(s, "--stats-json")) {
+            json_path = opt_value(&a, s);
         } else if (!strcmp(s, "--tree")) {
             tree_path = opt_value(&a, s);
             want_tree = 1;
@@ -468,6 +520,8 @@ static int cmd_stats(int argc, char **argv)
     }
     if (!scene_path)
         die_usage(a.usage, "%s", "missing SCENE");
+    if (json_path && !output_path_writable(json_path)) /* before the load and the build */
+        return EXIT_INPUT;
     bsp_scene *scene = load_scene(scene_path);
     apply_view_args(scene, scene_path, &view, &bopts, NULL);
     size_t n = bsp_scene_prim_count(scene);
@@ -536,9 +590,10 @@ static int cmd_stats(int argc, char **argv)
     double bg[3];
     bsp_scene_background(scene, bg);
     printf("background: %g %g %g\n", bg[0], bg[1], bg[2]);
-    int rc = 0;
+    int rc = 0, checked = 0;
+    bsp_accel *accel = NULL;
     if (want_tree) {
-        bsp_accel *accel = tree_or_build(&a, scene, &bopts, tree_path);
+        accel = tree_or_build(&a, scene, &bopts, tree_path);
         bsp_tree_stats t;
         bsp_accel_tree_stats(accel, &t);
         bsp_accel_kind kind = bsp_accel_get_kind(accel);
@@ -577,13 +632,18 @@ static int cmd_stats(int argc, char **argv)
             bsp_error err;
             if (bsp_accel_check(accel, &err) == BSP_OK) {
                 printf("  invariants     ok\n");
+                checked = 1;
             } else {
                 printf("  invariants     FAILED: %s\n", err.message);
+                checked = -1;
                 rc = EXIT_INPUT;
             }
         }
-        bsp_accel_destroy(accel);
     }
+    if (json_path &&
+        !write_scene_stats_json(json_path, scene_path, scene, accel, tree_path, checked))
+        rc = EXIT_INPUT;
+    bsp_accel_destroy(accel);
     bsp_scene_destroy(scene);
     return rc;
 }

@@ -2,6 +2,7 @@
  * cli.c — the helpers every subcommand of the bspray tool shares (cli.h).
  */
 #include <errno.h>
+#include <inttypes.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -246,6 +247,48 @@ void json_string(FILE *f, const char *s)
             fputc(*s, f);
     }
     fputc('"', f);
+}
+
+void json_real(FILE *f, double x)
+{
+    if (!isfinite(x)) {
+        fputs("null", f);
+        return;
+    }
+    char buf[32];
+    for (int digits = 15; digits <= 17; digits++) { /* the shortest that reads back as X */
+        snprintf(buf, sizeof buf, "%.*g", digits, x);
+        if (strtod(buf, NULL) == x)
+            break;
+    }
+    fputs(buf, f);
+}
+
+void tree_stats_json(FILE *f, const char *indent, const bsp_tree_stats *t, bsp_accel_kind kind)
+{
+    fprintf(f,
+            "%s\"N_IN\": %" PRIu64 ",\n%s\"N_V\": %" PRIu64 ",\n%s\"N_EV\": %" PRIu64
+            ",\n%s\"N_OIV\": %" PRIu64 ",\n",
+            indent, t->interior_nodes, indent, t->leaves, indent, t->empty_leaves, indent,
+            t->references);
+    fprintf(f, "%s\"leaf_depth_max\": %d,\n%s\"leaf_depth_mean\": ", indent, t->max_leaf_depth,
+            indent);
+    json_real(f, t->avg_leaf_depth);
+    fprintf(f, ",\n%s\"tree_bytes\": %" PRIu64 ",\n%s\"trace_bytes\": %" PRIu64 ",\n", indent,
+            t->bytes, indent, t->trace_bytes);
+    fprintf(f, "%s\"expected_cost\": ", indent);
+    json_real(f, t->expected_cost);
+    fprintf(f, ",\n%s\"model_cost\": ", indent);
+    json_real(f, t->model_cost);
+    fprintf(f, ",\n%s\"budget_cut\": ", indent);
+    json_real(f, t->budget_cut);
+    fprintf(f, ",\n%s\"budget_rebuilt\": %s,\n%s\"digest\": ", indent,
+            t->budget_rebuilt ? "true" : "false", indent);
+    if (kind == BSP_ACCEL_NAIVE)
+        fputs("null", f);
+    else
+        fprintf(f, "\"%016" PRIx64 "\"", t->digest);
+    fputs(",\n", f);
 }
 
 /* The number TEXT of option OPT, or a usage error saying WHAT it must be
@@ -501,14 +544,14 @@ void tree_time_row(FILE *f, const char *tree_path, double seconds, int digits)
         fprintf(f, "| T_B[s] | %.*f |\n", digits, seconds);
 }
 
-void tree_time_json(FILE *f, const char *tree_path, double seconds)
+void tree_time_json(FILE *f, const char *indent, const char *tree_path, double seconds)
 {
     if (tree_path) {
-        fprintf(f, "  \"tree_file\": ");
+        fprintf(f, "%s\"tree_file\": ", indent);
         json_string(f, tree_path);
-        fprintf(f, ",\n  \"T_load\": %.6f,\n", seconds);
+        fprintf(f, ",\n%s\"T_load\": %.6f,\n", indent, seconds);
     } else {
-        fprintf(f, "  \"T_B\": %.6f,\n", seconds);
+        fprintf(f, "%s\"T_B\": %.6f,\n", indent, seconds);
     }
 }
 

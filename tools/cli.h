@@ -112,11 +112,12 @@ bsp_accel *build_accel(const bsp_scene *scene, const bsp_build_options *opts);
 extern const char tree_arg_help[];
 bsp_accel *tree_or_build(const args *a, const bsp_scene *scene, const bsp_build_options *opts,
                          const char *tree_path);
-/* The structure's time as a Markdown row (DIGITS decimals) and as a JSON
- * member line (followed by a comma): T_B of a build, or, when TREE_PATH (the
- * --tree file) is not NULL, that file and T_load. */
+/* The structure's time as a Markdown row (DIGITS decimals) and as JSON
+ * member lines (indented by INDENT, each followed by a comma): T_B of a
+ * build, or, when TREE_PATH (the --tree file) is not NULL, that file and
+ * T_load. */
 void tree_time_row(FILE *f, const char *tree_path, double seconds, int digits);
-void tree_time_json(FILE *f, const char *tree_path, double seconds);
+void tree_time_json(FILE *f, const char *indent, const char *tree_path, double seconds);
 /* Seconds on a monotonic clock. */
 double now_seconds(void);
 /* A / B, or 0 when B is not positive (a per-ray figure of no rays). */
@@ -126,6 +127,15 @@ int default_threads(void);
 /* Writes S to F as a JSON string (quoted; quotes and backslashes escaped,
  * control characters dropped). */
 void json_string(FILE *f, const char *s);
+/* Writes X to F as a JSON number with up to 17 significant digits, or null
+ * when it is not finite (JSON has no inf or NaN). */
+void json_real(FILE *f, double x);
+/* The figures of a structure (bsp_accel_tree_stats) as JSON member lines,
+ * each indented by INDENT and followed by a comma: Havran's names (N_IN,
+ * N_V, N_EV, N_OIV), the leaf depths, both byte counts, both expected costs,
+ * the leaf budget's cut, and the digest, a string of 16 hex digits (a 64-bit
+ * value is not exact as a JSON number), null for the naive method. */
+void tree_stats_json(FILE *f, const char *indent, const bsp_tree_stats *t, bsp_accel_kind kind);
 
 /* The subcommands. */
 int cmd_bench(int argc, char **argv);

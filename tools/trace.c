@@ -255,11 +255,8 @@ static int write_json(const char *path, const char *scene, const trace_run *r,
             safe_div((double)c->traversal_steps, (double)c->rays),
             safe_div((double)c->leaves_visited, (double)c->rays),
             safe_div((double)c->empty_leaves, (double)c->rays));
-    fprintf(f,
-            "  \"N_IN\": %" PRIu64 ",\n  \"N_V\": %" PRIu64 ",\n  \"N_EV\": %" PRIu64
-            ",\n  \"N_OIV\": %" PRIu64 ",\n",
-            t->interior_nodes, t->leaves, t->empty_leaves, t->references);
-    tree_time_json(f, r->tree_path, bsp_accel_build_seconds(r->accel));
+    tree_stats_json(f, "  ", t, bsp_accel_get_kind(r->accel));
+    tree_time_json(f, "  ", r->tree_path, bsp_accel_build_seconds(r->accel));
     fprintf(f, "  \"T_TR\": %.6f\n}\n", r->seconds);
     if (fclose(f) != 0) {
         fprintf(stderr, "%s: %s: write failed: %s\n", prog, path, strerror(errno));
