@@ -418,7 +418,8 @@ TEST(cli_stats_json_matches_the_library)
 
     /* valid JSON, by a parser of its own */
     snprintf(cmd, sizeof cmd,
-             "python3 -c 'import json,sys; [json.load(open(a)) for a in sys.argv[1:]]' %s %s %s %s "
+             "python3 -c 'import json,sys; [json.load(open(a, encoding=\"utf-8\")) for a in "
+             "sys.argv[1:]]' %s %s %s %s "
              "%s 2>&1",
              sj, rj, tj, nj, sc);
     out = harness_run(cmd, &st);
@@ -439,6 +440,50 @@ TEST(cli_stats_json_matches_the_library)
     CHECK_MSG(!strstr(out, "primitives:"), "stats printed before failing:\n%s", out);
     free(out);
     bsp_scene_destroy(scene);
+}
+
+/* A scene's path in the JSON files is a JSON string whatever its bytes: UTF-8
+ * kept as it is, a quote escaped, a byte of another encoding replaced by
+ * U+FFFD (it made the file invalid before). */
+TEST(cli_json_scene_names_stay_json)
+{
+    static const char *const names[2] = {"szene-\xc3\xbc.nff", "bad-\xff\"q.nff"};
+    static const char *const tail[2] = {"szene-\xc3\xbc.nff\"", "bad-\\ufffd\\\"q.nff\""};
+    for (int i = 0; i < 2; i++) {
+        char nff[512], json[512], cmd[4096];
+        harness_tmp_path(nff, sizeof nff, names[i]);
+        harness_tmp_path(json, sizeof json, i ? "name1.json" : "name0.json");
+        /* the shell sees the name in single quotes; it holds none */
+        snprintf(cmd, sizeof cmd, "%s gen balls -s 1 -o '%s' && %s stats '%s' --stats-json %s",
+                 harness_cli(), nff, harness_cli(), nff, json);
+        int st;
+        char *out = harness_run(cmd, &st);
+        REQUIRE(out);
+        CHECK_EQ_INT(st, 0);
+        free(out);
+        char *j = read_text(json);
+        REQUIRE(j);
+        const char *v = json_member(j, "scene");
+        REQUIRE(v);
+        const char *end = strchr(v + 1, '\n');
+        REQUIRE(end);
+        size_t tl = strlen(tail[i]);
+        /* the value ends with the name as written (then a comma) */
+        CHECK_MSG((size_t)(end - v) > tl && !strncmp(end - 1 - tl, tail[i], tl),
+                  "case %d: %.*s", i, (int)(end - v), v);
+        free(j);
+        snprintf(cmd, sizeof cmd,
+                 "python3 -c 'import json,sys; json.load(open(sys.argv[1], encoding=\"utf-8\"))' %s "
+                 "2>&1",
+                 json);
+        out = harness_run(cmd, &st);
+        REQUIRE(out);
+        if (st == 127)
+            printf("  python3 not found: the JSON syntax is not checked\n");
+        else
+            CHECK_MSG(st == 0, "case %d does not parse: %s", i, out);
+        free(out);
+    }
 }
 
 TEST(cli_gen_round_trip)

@@ -237,14 +237,51 @@ int default_threads(void)
     return n > 0 ? (int)n : 1;
 }
 
+/* The length of the well-formed UTF-8 sequence at S (no overlong forms, no
+ * surrogates, at most U+10FFFF), or 0 when S does not start one. */
+static int utf8_length(const unsigned char *s)
+{
+    int n;
+    unsigned min;
+    unsigned cp;
+    if (s[0] < 0x80)
+        return 1;
+    if ((s[0] & 0xe0) == 0xc0)
+        n = 2, min = 0x80, cp = s[0] & 0x1fu;
+    else if ((s[0] & 0xf0) == 0xe0)
+        n = 3, min = 0x800, cp = s[0] & 0x0fu;
+    else if ((s[0] & 0xf8) == 0xf0)
+        n = 4, min = 0x10000, cp = s[0] & 0x07u;
+    else
+        return 0;
+    for (int i = 1; i < n; i++) {
+        if ((s[i] & 0xc0) != 0x80) /* also stops at the terminating NUL */
+            return 0;
+        cp = cp << 6 | (s[i] & 0x3fu);
+    }
+    if (cp < min || cp > 0x10ffff || (cp >= 0xd800 && cp <= 0xdfff))
+        return 0;
+    return n;
+}
+
 void json_string(FILE *f, const char *s)
 {
+    const unsigned char *u = (const unsigned char *)s;
     fputc('"', f);
-    for (; *s; s++) {
-        if (*s == '"' || *s == '\\')
-            fputc('\\', f);
-        if ((unsigned char)*s >= 0x20)
-            fputc(*s, f);
+    while (*u) {
+        int n = utf8_length(u);
+        if (n == 0) { /* not UTF-8 (a path's bytes in another encoding): the replacement
+                         character, so that the file stays JSON */
+            fputs("\\ufffd", f);
+            u++;
+        } else if (*u < 0x20) { /* a control character */
+            u++;
+        } else {
+            if (*u == '"' || *u == '\\')
+                fputc('\\', f);
+            fwrite(u, 1, (size_t)n, f);
+            u += n;
+        }
     }
     fputc('"', f);
 }

@@ -125,7 +125,8 @@ double safe_div(double a, double b);
 /* The number of cores online (at least 1): the default of every --threads. */
 int default_threads(void);
 /* Writes S to F as a JSON string (quoted; quotes and backslashes escaped,
- * control characters dropped). */
+ * control characters dropped, each byte that is not part of well-formed
+ * UTF-8 written as U+FFFD). */
 void json_string(FILE *f, const char *s);
 /* Writes X to F as a JSON number with up to 17 significant digits, or null
  * when it is not finite (JSON has no inf or NaN). */
