@@ -312,6 +312,17 @@ static char *read_text(const char *path)
     return (char *)harness_read_file(path, &len);
 }
 
+/* Runs CMD, which must exit 0, and returns the text of the JSON file PATH it
+ * wrote (NULL, with a failure, when it did not). */
+static char *json_of_run(const char *cmd, const char *path)
+{
+    int st;
+    char *out = harness_run(cmd, &st);
+    CHECK_MSG(out && st == 0, "'%s' exited with %d: %s", cmd, st, out ? out : "");
+    free(out);
+    return read_text(path);
+}
+
 /* stats --stats-json, and the tree figures render and trace add to theirs:
  * every figure is the library's for the same scene and options
  * (bsp_accel_tree_stats of a build in this process: the build makes the same
@@ -341,12 +352,7 @@ TEST(cli_stats_json_matches_the_library)
     harness_tmp_path(rays, sizeof rays, "stats_json");
     snprintf(cmd, sizeof cmd, "%s stats %s --accel sah --check --stats-json %s", harness_cli(),
              spec, sj);
-    int st;
-    char *out = harness_run(cmd, &st);
-    REQUIRE(out);
-    CHECK_EQ_INT(st, 0);
-    free(out);
-    char *j = read_text(sj);
+    char *j = json_of_run(cmd, sj);
     REQUIRE(j);
     CHECK_EQ_INT((long)json_num(j, "primitives"), (long)bsp_scene_prim_count(scene));
     for (int k = 0; k < BSP_PRIM_KIND_COUNT; k++)
@@ -374,21 +380,15 @@ TEST(cli_stats_json_matches_the_library)
     free(j);
 
     /* render and trace: the same figures of the same tree */
-    snprintf(cmd, sizeof cmd, "%s render %s --res 9 --quiet --save-rays %s --stats-json %s -o %s",
-             harness_cli(), spec, rays, rj, img);
-    out = harness_run(cmd, &st);
-    REQUIRE(out);
-    CHECK_EQ_INT(st, 0);
-    free(out);
-    snprintf(cmd, sizeof cmd, "%s trace %s --rays %s-primary.txt --stats-json %s", harness_cli(),
-             spec, rays, tj);
-    out = harness_run(cmd, &st);
-    REQUIRE(out);
-    CHECK_EQ_INT(st, 0);
-    free(out);
+    char cmds[2][4096];
+    snprintf(cmds[0], sizeof cmds[0],
+             "%s render %s --res 9 --quiet --save-rays %s --stats-json %s -o %s", harness_cli(),
+             spec, rays, rj, img);
+    snprintf(cmds[1], sizeof cmds[1], "%s trace %s --rays %s-primary.txt --stats-json %s",
+             harness_cli(), spec, rays, tj); /* the render's rays */
     const char *files[2] = {rj, tj};
     for (int i = 0; i < 2; i++) {
-        j = read_text(files[i]);
+        j = json_of_run(cmds[i], files[i]);
         REQUIRE(j);
         CHECK_STR_CONTAINS(j, digest);
         CHECK_EQ_INT((long)json_num(j, "N_V"), (long)t.leaves);
@@ -397,17 +397,14 @@ TEST(cli_stats_json_matches_the_library)
         free(j);
     }
 
-    /* the naive method has no digest; no structure, no structure member */
+    /* the naive method has no digest; without --accel there is no structure member */
     char nj[512], sc[512];
     harness_tmp_path(nj, sizeof nj, "naive.json");
     harness_tmp_path(sc, sizeof sc, "scene.json");
-    snprintf(cmd, sizeof cmd, "%s stats %s --accel naive --stats-json %s && %s stats %s --stats-json %s",
+    snprintf(cmd, sizeof cmd,
+             "%s stats %s --accel naive --stats-json %s && %s stats %s --stats-json %s",
              harness_cli(), spec, nj, harness_cli(), spec, sc);
-    out = harness_run(cmd, &st);
-    REQUIRE(out);
-    CHECK_EQ_INT(st, 0);
-    free(out);
-    j = read_text(nj);
+    j = json_of_run(cmd, nj);
     REQUIRE(j);
     CHECK_STR_CONTAINS(j, "\"digest\": null");
     free(j);
@@ -419,10 +416,10 @@ TEST(cli_stats_json_matches_the_library)
     /* valid JSON, by a parser of its own */
     snprintf(cmd, sizeof cmd,
              "python3 -c 'import json,sys; [json.load(open(a, encoding=\"utf-8\")) for a in "
-             "sys.argv[1:]]' %s %s %s %s "
-             "%s 2>&1",
+             "sys.argv[1:]]' %s %s %s %s %s 2>&1",
              sj, rj, tj, nj, sc);
-    out = harness_run(cmd, &st);
+    int st;
+    char *out = harness_run(cmd, &st);
     REQUIRE(out);
     if (st == 127)
         printf("  python3 not found: the files' JSON syntax is not checked\n");
@@ -456,12 +453,7 @@ TEST(cli_json_scene_names_stay_json)
         /* the shell sees the name in single quotes; it holds none */
         snprintf(cmd, sizeof cmd, "%s gen balls -s 1 -o '%s' && %s stats '%s' --stats-json %s",
                  harness_cli(), nff, harness_cli(), nff, json);
-        int st;
-        char *out = harness_run(cmd, &st);
-        REQUIRE(out);
-        CHECK_EQ_INT(st, 0);
-        free(out);
-        char *j = read_text(json);
+        char *j = json_of_run(cmd, json);
         REQUIRE(j);
         const char *v = json_member(j, "scene");
         REQUIRE(v);
@@ -476,7 +468,8 @@ TEST(cli_json_scene_names_stay_json)
                  "python3 -c 'import json,sys; json.load(open(sys.argv[1], encoding=\"utf-8\"))' %s "
                  "2>&1",
                  json);
-        out = harness_run(cmd, &st);
+        int st;
+        char *out = harness_run(cmd, &st);
         REQUIRE(out);
         if (st == 127)
             printf("  python3 not found: the JSON syntax is not checked\n");
