@@ -323,7 +323,7 @@ static char *json_of_run(const char *cmd, const char *path)
     return read_text(path);
 }
 
-/* stats --stats-json, and the tree figures render and trace add to theirs:
+/* stats --stats-json, and the tree figures render, trace and build add to theirs:
  * every figure is the library's for the same scene and options
  * (bsp_accel_tree_stats of a build in this process: the build makes the same
  * tree on any number of threads), the numbers read back bit for bit, and
@@ -379,21 +379,33 @@ TEST(cli_stats_json_matches_the_library)
     CHECK_STR_CONTAINS(j, "\"accel\": \"sah\"");
     free(j);
 
-    /* render and trace: the same figures of the same tree */
-    char cmds[2][4096];
+    /* render, trace, build, and stats of the tree build saved: the same figures
+     * of the same tree */
+    char bj[512], lj[512], kdt[512], cmds[4][4096];
+    harness_tmp_path(bj, sizeof bj, "build.json");
+    harness_tmp_path(lj, sizeof lj, "loaded.json");
+    harness_tmp_path(kdt, sizeof kdt, "stats_json.kdt");
     snprintf(cmds[0], sizeof cmds[0],
              "%s render %s --res 9 --quiet --save-rays %s --stats-json %s -o %s", harness_cli(),
              spec, rays, rj, img);
     snprintf(cmds[1], sizeof cmds[1], "%s trace %s --rays %s-primary.txt --stats-json %s",
              harness_cli(), spec, rays, tj); /* the render's rays */
-    const char *files[2] = {rj, tj};
-    for (int i = 0; i < 2; i++) {
+    snprintf(cmds[2], sizeof cmds[2], "%s build %s -o %s --quiet --stats-json %s", harness_cli(),
+             spec, kdt, bj);
+    snprintf(cmds[3], sizeof cmds[3], "%s stats %s --tree %s --stats-json %s", harness_cli(), spec,
+             kdt, lj);
+    const char *files[4] = {rj, tj, bj, lj};
+    for (int i = 0; i < 4; i++) {
         j = json_of_run(cmds[i], files[i]);
         REQUIRE(j);
         CHECK_STR_CONTAINS(j, digest);
         CHECK_EQ_INT((long)json_num(j, "N_V"), (long)t.leaves);
         CHECK_EQ_INT((long)json_num(j, "N_OIV"), (long)t.references);
         CHECK(json_num(j, "expected_cost") == t.expected_cost);
+        if (i == 3) /* loaded, not built */
+            CHECK_MSG(json_member(j, "tree_file") && json_member(j, "T_load") &&
+                          !json_member(j, "T_B"),
+                      "%s", j);
         free(j);
     }
 
@@ -416,8 +428,8 @@ TEST(cli_stats_json_matches_the_library)
     /* valid JSON, by a parser of its own */
     snprintf(cmd, sizeof cmd,
              "python3 -c 'import json,sys; [json.load(open(a, encoding=\"utf-8\")) for a in "
-             "sys.argv[1:]]' %s %s %s %s %s 2>&1",
-             sj, rj, tj, nj, sc);
+             "sys.argv[1:]]' %s %s %s %s %s %s %s 2>&1",
+             sj, rj, tj, bj, lj, nj, sc);
     int st;
     char *out = harness_run(cmd, &st);
     REQUIRE(out);

@@ -11,7 +11,8 @@
 #include "cli.h"
 
 static const char build_usage[] =
-    "bspray build SCENE -o FILE [--accel METHOD] [build options] [--check] [--quiet]";
+    "bspray build SCENE -o FILE [--accel METHOD] [build options] [--check] [--stats-json F]\n"
+    "                   [--quiet]";
 
 static const char build_help[] =
     "Build SCENE's kd-tree and save it in FILE, so that later runs load it instead of\n"
@@ -23,12 +24,14 @@ static const char build_help[] =
     "\n"
     "  -o FILE            the file to write (whole or not at all)\n"
     "  --check            run the tree invariant checker before saving\n"
+    "  --stats-json FILE  also write the scene's and the tree's figures as JSON, as\n"
+    "                     `bspray stats --stats-json` does\n"
     "  --quiet            print nothing on success\n";
 
 int cmd_build(int argc, char **argv)
 {
     args a = {argc, 1, argv, build_usage, NULL};
-    const char *scene_path = NULL, *out_path = NULL;
+    const char *scene_path = NULL, *out_path = NULL, *json_path = NULL;
     int check = 0, quiet = 0;
     view_args view = {0};
     bsp_build_options bopts;
@@ -43,6 +46,8 @@ int cmd_build(int argc, char **argv)
             out_path = opt_value(&a, s);
         } else if (!strcmp(s, "--check")) {
             check = 1;
+        } else if (!strcmp(s, "--stats-json")) {
+            json_path = opt_value(&a, s);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             quiet = 1;
         } else if (parse_build_arg(&a, &bopts) || parse_view_arg(&a, &view)) {
@@ -57,7 +62,7 @@ int cmd_build(int argc, char **argv)
         die_usage(a.usage, "%s", "missing -o FILE");
     if (bopts.kind == BSP_ACCEL_NAIVE)
         die_usage(a.usage, "%s", "the naive method has no structure to save: use a kd-tree");
-    if (!output_path_writable(out_path))
+    if (!output_path_writable(out_path) || (json_path && !output_path_writable(json_path)))
         return EXIT_INPUT;
     bsp_scene *scene = load_scene(scene_path);
     apply_view_args(scene, scene_path, &view, &bopts, NULL);
@@ -69,6 +74,9 @@ int cmd_build(int argc, char **argv)
         rc = EXIT_INPUT;
     } else if (bsp_accel_save(accel, out_path, &err) != BSP_OK) {
         fprintf(stderr, "%s: %s\n", prog, err.message);
+        rc = EXIT_INPUT;
+    } else if (json_path &&
+               !write_stats_json_file(json_path, scene_path, scene, accel, NULL, check)) {
         rc = EXIT_INPUT;
     } else if (!quiet) {
         bsp_tree_stats t;

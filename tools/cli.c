@@ -592,6 +592,53 @@ void tree_time_json(FILE *f, const char *indent, const char *tree_path, double s
     }
 }
 
+int write_stats_json_file(const char *path, const char *scene_path, const bsp_scene *scene,
+                          const bsp_accel *accel, const char *tree_path, int checked)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) {
+        fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, path, strerror(errno));
+        return 0;
+    }
+    fprintf(f, "{\n  \"scene\": ");
+    json_string(f, scene_path);
+    fprintf(f, ",\n  \"primitives\": %zu,\n  \"kinds\": {", bsp_scene_prim_count(scene));
+    for (int k = 0; k < BSP_PRIM_KIND_COUNT; k++)
+        fprintf(f, "%s\"%s\": %zu", k ? ", " : "", bsp_prim_kind_name((bsp_prim_kind)k),
+                bsp_scene_kind_count(scene, (bsp_prim_kind)k));
+    bsp_box b = bsp_scene_bounds(scene);
+    fprintf(f, "},\n  \"bounds\": ");
+    if (b.lo.x <= b.hi.x) {
+        const double v[6] = {b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z};
+        for (int i = 0; i < 6; i++) {
+            fputs(i == 0 ? "{\"min\": [" : i == 3 ? "], \"max\": [" : ", ", f);
+            json_real(f, v[i]);
+        }
+        fputs("]}", f);
+    } else {
+        fputs("null", f); /* no primitive */
+    }
+    fprintf(f, ",\n  \"lights\": %zu,\n  \"materials\": %zu", bsp_scene_light_count(scene),
+            bsp_scene_material_count(scene));
+    if (accel) {
+        bsp_tree_stats t;
+        bsp_accel_tree_stats(accel, &t);
+        bsp_accel_kind kind = bsp_accel_get_kind(accel);
+        fprintf(f, ",\n  \"structure\": {\n");
+        tree_time_json(f, "    ", tree_path, bsp_accel_build_seconds(accel));
+        tree_stats_json(f, "    ", &t, kind);
+        if (checked)
+            fprintf(f, "    \"invariants\": \"%s\",\n", checked > 0 ? "ok" : "failed");
+        fprintf(f, "    \"accel\": \"%s\"\n  }", bsp_accel_kind_name(kind));
+    }
+    fputs("\n}\n", f);
+    if (fclose(f) != 0) {
+        fprintf(stderr, "%s: %s: write failed: %s\n", prog, path, strerror(errno));
+        return 0;
+    }
+    return 1;
+}
+
 const char view_args_help[] =
     "  --eye, --at, --up X,Y,Z   override the camera (any of them; for meshes, the rest\n"
     "                     of the default view adapts); --dir X,Y,Z: look along X,Y,Z\n"
