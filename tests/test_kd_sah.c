@@ -1,5 +1,5 @@
 /*
- * test_kd_sah.c — the SAH kd-tree builder (src/accel/kd_split_sah.c), its
+ * test_kd_sah.c — the SAH kd-tree builder (src/accel/kd_split_sah.c, kd_sah_node.c), its
  * cost model (kd_cost.c) and split clipping (kd_clip.c).
  *
  * - hand-computed cases: empty space is cut off exactly at a primitive's
@@ -388,7 +388,7 @@ TEST(sah_root_plane_is_the_brute_force_optimum)
 }
 
 /* The same on larger scenes, where the sweep evaluates only the runs of
- * events whose lower bound can beat a probe (kd_split_sah.c): clusters of
+ * events whose lower bound can beat a probe (kd_sweep_linear.c): clusters of
  * spheres and triangles (classes of cost) or spheres alone (uniform), with
  * the mailbox term and the plain model (trial 3). */
 TEST(sah_root_plane_is_the_brute_force_optimum_on_large_nodes)
@@ -1118,7 +1118,7 @@ TEST(sah_exact_stress_duplicates_and_degenerates)
 
 /* A pile of large overlapping squares in one plane (found by fuzzing): in
  * the flat cells every split pays a little, and without the straddle guard
- * (kd_split_sah.c) the tree grew to thousands of references per square (400
+ * (kd_sah_node.c) the tree grew to thousands of references per square (400
  * squares: 2.1 M references and 0.6 s; 2,000: 46 M, 49 s, 1.3 GB). With it
  * the tree stays near a thousand per square, its expected cost within 0.4 %
  * of the unguarded tree's (measured), and the answers are exact. */

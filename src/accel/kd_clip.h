@@ -53,7 +53,7 @@ HIDDEN int kd_clip_prim_split(const bsp_scene *scene, uint32_t prim, bsp_box pb,
                               kd_clip_scratch *scr, bsp_box out[2]);
 
 /* The parts of triangles and polygons inside the cells along an SAH
- * build's path (kd_split_sah.c), so that a straddler is clipped by the one
+ * build's path (kd_sah_node.c), so that a straddler is clipped by the one
  * plane of each split instead of to the whole cell every time: OF[p] is the
  * handle of primitive p's part in the current cell's G (the cell grown by
  * the padding), the polygon of the vertices V[h >> KD_PART_COUNT_BITS ..][0

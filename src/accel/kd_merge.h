@@ -1,6 +1,6 @@
 /*
  * kd_merge.h — the SAH builder's merge of a few new event keys into a
- * child's sorted list (the straddlers' clipped events, kd_split_sah.c).
+ * child's sorted list (the straddlers' clipped events, kd_sah_node.c).
  */
 #ifndef BSPRAY_ACCEL_KD_MERGE_H
 #define BSPRAY_ACCEL_KD_MERGE_H

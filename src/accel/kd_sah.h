@@ -1,8 +1,8 @@
 /*
- * kd_sah.h — what the SAH builder (kd_split_sah.c) shares with its plane
+ * kd_sah.h — what the SAH builder (kd_split_sah.c, kd_sah_node.c) shares with its plane
  * sweeps (kd_sweep_measure.c: any measure; kd_sweep_linear.c: the surface
  * area with a linear cost): the 64-bit events and their keys, the builder's
- * state, and the two sweeps. See kd_split_sah.c for the events and the cost
+ * state, and the two sweeps. See kd_sah_node.c for the events and the cost
  * model.
  */
 #ifndef BSPRAY_ACCEL_KD_SAH_H
@@ -179,7 +179,7 @@ typedef struct sah_build {
     size_t list_cap;
     kd_clip_scratch clip;
     kd_clip_path path;    /* straddling triangles' and polygons' parts along the path (kd_clip.h) */
-    struct part_save *saved; /* the parts a split changed in OF, to restore (kd_split_sah.c) */
+    struct part_save *saved; /* the parts a split changed in OF, to restore (kd_sah_node.c) */
     size_t nsaved, saved_cap;
     bsp_error *err;
     void (*progress)(double done, void *ctx); /* bsp_build_options.progress, or NULL */
@@ -273,7 +273,7 @@ typedef struct node_lists {
 } node_lists;
 
 /* Builds the subtree of NODE over CELL from the lists L; b->ev[top, ...) is
- * free (kd_split_sah.c). */
+ * free (kd_sah_node.c). */
 HIDDEN bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lists L,
                                     size_t top, int depth, int bad, int surface, double *cost_out);
 
@@ -332,7 +332,7 @@ HIDDEN void kd_sweep_linear(sah_build *b, const uint64_t *ev, size_t stride, siz
  * negative, so a plane costs at least C_trav, C_trav (1 - bonus) with the
  * empty bonus; the margin covers the rounding of the bonus's transform
  * (lin_bonus). The builder skips the sweep of a node that no split could
- * make worth a node (no_split_saves_enough in kd_split_sah.c). */
+ * make worth a node (no_split_saves_enough in kd_sah_node.c). */
 static inline double kd_sweep_linear_least_cost(const sah_build *b)
 {
     return b->ctrav * b->bonus_mul * (1.0 - 1e-9);

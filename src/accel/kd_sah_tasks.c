@@ -1,7 +1,7 @@
 /*
  * kd_sah_tasks.c — the SAH build's subtrees built in parallel.
  *
- * The main build (kd_split_sah.c) builds the top of the tree itself and
+ * The main build (kd_split_sah.c, kd_sah_node.c) builds the top of the tree itself and
  * defers every node of a middle size (sah_tasks.min_n..max_n primitives)
  * whose ancestors are all "good" splits: such a subtree's cost is never
  * needed by an ancestor (only a speculative "bad refine" retracts its

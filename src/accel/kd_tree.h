@@ -172,7 +172,7 @@ HIDDEN bsp_box kd_prim_box(const kd_tree *t, const bsp_scene *scene, uint32_t pr
 /* Kaplan's rule: spatial median, axes in turn. Fills T (already set up). */
 HIDDEN bsp_status kd_build_median(kd_tree *t, const bsp_scene *scene, bsp_error *err);
 /* Surface area heuristic, exact O(N log N) event build with perfect splits
- * (kd_split_sah.c). Fills T (already set up) with the costs of O. */
+ * (kd_split_sah.c, kd_sah_node.c). Fills T (already set up) with the costs of O. */
 HIDDEN bsp_status kd_build_sah(kd_tree *t, const bsp_scene *scene, const bsp_build_options *o,
                                bsp_error *err);
 /* Replaces 0 limits of O by the SAH defaults for SCENE: max_depth

@@ -18,7 +18,7 @@
  * A box that contains the eye (closed box) is crossed by every ray of a PER
  * view: its measure is the whole viewport. A box behind the eye plane or
  * outside the viewport gets 0; the builder then measures it by its surface
- * area instead (build_node in kd_split_sah.c), because the secondary and
+ * area instead (kd_sah_build_node in kd_sah_node.c), because the secondary and
  * shadow rays still need a good tree there (docs/modified-sah.md).
  */
 #include <float.h>
