@@ -312,6 +312,25 @@ static char *read_text(const char *path)
     return (char *)harness_read_file(path, &len);
 }
 
+/* FILES (paths separated by spaces) parse as JSON, by python3's parser; where
+ * there is no python3 that is said, and the syntax is not checked. */
+static void check_json_syntax(const char *files)
+{
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd,
+             "python3 -c 'import json,sys; [json.load(open(a, encoding=\"utf-8\")) for a in "
+             "sys.argv[1:]]' %s 2>&1",
+             files);
+    int st;
+    char *out = harness_run(cmd, &st);
+    REQUIRE(out);
+    if (st == 127)
+        printf("  python3 not found: the JSON syntax of %s is not checked\n", files);
+    else
+        CHECK_MSG(st == 0, "%s: a file does not parse as JSON: %s", files, out);
+    free(out);
+}
+
 /* Runs CMD, which must exit 0, and returns the text of the JSON file PATH it
  * wrote (NULL, with a failure, when it did not). */
 static char *json_of_run(const char *cmd, const char *path)
@@ -426,23 +445,14 @@ TEST(cli_stats_json_matches_the_library)
     free(j);
 
     /* valid JSON, by a parser of its own */
-    snprintf(cmd, sizeof cmd,
-             "python3 -c 'import json,sys; [json.load(open(a, encoding=\"utf-8\")) for a in "
-             "sys.argv[1:]]' %s %s %s %s %s %s %s 2>&1",
-             sj, rj, tj, bj, lj, nj, sc);
-    int st;
-    char *out = harness_run(cmd, &st);
-    REQUIRE(out);
-    if (st == 127)
-        printf("  python3 not found: the files' JSON syntax is not checked\n");
-    else
-        CHECK_MSG(st == 0, "a JSON file does not parse: %s", out);
-    free(out);
+    snprintf(cmd, sizeof cmd, "%s %s %s %s %s %s %s", sj, rj, tj, bj, lj, nj, sc);
+    check_json_syntax(cmd);
 
     /* an unwritable file: exit 1 before anything is loaded or printed */
     snprintf(cmd, sizeof cmd, "%s stats %s --accel sah --stats-json %s/no/such/dir/x.json 2>&1",
              harness_cli(), spec, harness_tmpdir());
-    out = harness_run(cmd, &st);
+    int st;
+    char *out = harness_run(cmd, &st);
     REQUIRE(out);
     CHECK_EQ_INT(st, 1);
     CHECK_STR_CONTAINS(out, "x.json: cannot open for writing");
@@ -476,18 +486,7 @@ TEST(cli_json_scene_names_stay_json)
         CHECK_MSG((size_t)(end - v) > tl && !strncmp(end - 1 - tl, tail[i], tl),
                   "case %d: %.*s", i, (int)(end - v), v);
         free(j);
-        snprintf(cmd, sizeof cmd,
-                 "python3 -c 'import json,sys; json.load(open(sys.argv[1], encoding=\"utf-8\"))' %s "
-                 "2>&1",
-                 json);
-        int st;
-        char *out = harness_run(cmd, &st);
-        REQUIRE(out);
-        if (st == 127)
-            printf("  python3 not found: the JSON syntax is not checked\n");
-        else
-            CHECK_MSG(st == 0, "case %d does not parse: %s", i, out);
-        free(out);
+        check_json_syntax(json);
     }
 }
 
