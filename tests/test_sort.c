@@ -5,7 +5,9 @@
  * sort threshold; and the heapsort that bounds its worst case, alone. The
  * radix sort of doubles (src/util/sort_doubles.h) against qsort on values of
  * both signs, zeros of both signs, repeats, infinities and magnitudes from
- * subnormal to huge.
+ * subnormal to huge. The radix sort of keys by their upper bits
+ * (src/util/radix_sort.h), which must be stable, against qsort of the whole
+ * keys whose low bits are the original index.
  */
 #include <math.h>
 #include <stdint.h>
@@ -13,6 +15,7 @@
 #include <string.h>
 
 #include "harness.h"
+#include "util/radix_sort.h"
 #include "util/sort.h"
 #include "util/sort_doubles.h"
 
@@ -123,6 +126,59 @@ TEST(sort_doubles_matches_qsort)
                 same &= a[i] == b[i];
             CHECK_MSG(same, "length %zu, pattern %d", n, p);
         }
+    free(a);
+    free(b);
+    free(tmp);
+}
+
+/* Keys of pattern P in bits LOW..63 (the rest below LOW is the index, so
+ * qsort of whole keys gives the one stable order by the upper bits). */
+static uint64_t upper_of(size_t i, unsigned low, int p)
+{
+    uint64_t r = next_u64();
+    switch (p) {
+    case 0: break;                                             /* random */
+    case 1: r %= 7; if (64 - low > 3) r <<= 61 - low; break;  /* few values, top digits only */
+    case 2: r = (uint64_t)0xabcdef << 20 | (r & 0xfff); break; /* shared upper digits */
+    case 3: r = 42; break;                                     /* all equal: every digit skipped */
+    default: r = ~(uint64_t)i; break;                          /* reversed */
+    }
+    return low == 0 ? r : r << low;
+}
+
+TEST(radix_sort_is_stable_by_the_upper_bits)
+{
+    const size_t lens[] = {0, 1, 2, 3, 100, 4097, 30000};
+    const unsigned lows[] = {0, 28, 40, 63};
+    const unsigned widths[] = {1, 5, 8, 11, 12};
+    uint64_t *a = malloc(30000 * sizeof *a), *b = malloc(30000 * sizeof *b);
+    uint64_t *tmp = malloc(30000 * sizeof *tmp);
+    REQUIRE(a && b && tmp);
+    for (size_t li = 0; li < sizeof lens / sizeof *lens; li++)
+        for (size_t lo = 0; lo < sizeof lows / sizeof *lows; lo++)
+            for (size_t wi = 0; wi < sizeof widths / sizeof *widths; wi++)
+                for (int p = 0; p < 5; p++) {
+                    size_t n = lens[li];
+                    unsigned low = lows[lo];
+                    /* the index below LOW (as much of it as fits) */
+                    uint64_t index_mask = low == 0 ? 0 : (low >= 64 ? ~0ull : ((uint64_t)1 << low) - 1);
+                    for (size_t i = 0; i < n; i++)
+                        a[i] = b[i] = upper_of(i, low, p) | (i & index_mask);
+                    radix_sort_u64(a, tmp, n, low, widths[wi]);
+                    int ok = 1;
+                    if (low == 0 || n <= index_mask + 1) {
+                        qsort(b, n, sizeof *b, cmp_u64);
+                        ok = n == 0 || !memcmp(a, b, n * sizeof *a);
+                    } else { /* the index does not fit: ascending by the upper bits, a permutation */
+                        for (size_t i = 1; i < n; i++)
+                            ok &= (a[i - 1] >> low) <= (a[i] >> low);
+                        uint64_t sa = 0, sb = 0;
+                        for (size_t i = 0; i < n; i++)
+                            sa += a[i] * 0x9e3779b97f4a7c15ull ^ a[i], sb += b[i] * 0x9e3779b97f4a7c15ull ^ b[i];
+                        ok &= sa == sb;
+                    }
+                    CHECK_MSG(ok, "length %zu, low %u, width %u, pattern %d", n, low, widths[wi], p);
+                }
     free(a);
     free(b);
     free(tmp);

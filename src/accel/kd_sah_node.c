@@ -97,6 +97,7 @@
 #include "accel/kd_sah.h"
 #include "util/grow.h"
 #include "util/sort.h"
+#include "util/sorted_count.h"
 
 #define MAX_BAD_REFINES 1
 #define MIN_BAD_REFINE_PRIMS 8
@@ -446,15 +447,7 @@ bsp_status kd_sah_build_node(sah_build *b, uint32_t node, bsp_box cell, node_lis
     {
         const uint64_t *e = b->ev + L.base + axis * L.stride;
         const uint64_t sk = ((uint64_t)float_key(best.pos) << 32) | EV_START;
-        size_t lo = 0, hi = m; /* the first event >= SK */
-        while (lo < hi) {
-            size_t mid = lo + (hi - lo) / 2;
-            if (e[mid] < sk)
-                lo = mid + 1;
-            else
-                hi = mid;
-        }
-        const size_t split_i = lo;
+        const size_t split_i = sorted_first_at_least_u64(e, m, sk); /* the first event >= SK */
         classify_counts cc = {0, 0, 0, 0.0, 0.0};
         if (!grow_list(b, n + 1))
             return oom(b);

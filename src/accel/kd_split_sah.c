@@ -12,42 +12,11 @@
 
 #include "accel/kd_prune.h"
 #include "accel/kd_sah.h"
+#include "util/radix_sort.h"
 
 #define ROOT_LISTS_PARALLEL_MIN (1u << 17) /* events per axis: a thread for fewer costs more */
 
-/* --- sorting -------------------------------------------------------------------------- */
-
-/* Stable LSD radix sort of A[0..N) by key bits 28..63 (position, type, cost
- * class): 3 passes of 12 bits through TMP[0..N), skipping a pass where every
- * key has the same digit. Keys made in primitive order (bits 0..27) end up
- * in the order of the whole key. */
-static void radix_sort(uint64_t *a, uint64_t *tmp, size_t n)
-{
-    enum { BITS = 12, BUCKETS = 1 << BITS, LOW = EV_CLASS_SHIFT };
-    _Static_assert(LOW + 3 * BITS == 64, "three passes cover the bits above the primitive");
-    size_t count[BUCKETS];
-    uint64_t *src = a, *dst = tmp;
-    for (int shift = LOW; shift < 64; shift += BITS) {
-        memset(count, 0, sizeof count);
-        for (size_t i = 0; i < n; i++)
-            count[(src[i] >> shift) & (BUCKETS - 1)]++;
-        if (n == 0 || count[(src[0] >> shift) & (BUCKETS - 1)] == n)
-            continue;
-        size_t sum = 0;
-        for (int b = 0; b < BUCKETS; b++) {
-            size_t c = count[b];
-            count[b] = sum;
-            sum += c;
-        }
-        for (size_t i = 0; i < n; i++)
-            dst[count[(src[i] >> shift) & (BUCKETS - 1)]++] = src[i];
-        uint64_t *x = src;
-        src = dst;
-        dst = x;
-    }
-    if (src != a)
-        memcpy(a, src, n * sizeof *a);
-}
+/* --- helpers -------------------------------------------------------------------------- */
 
 static bsp_status oom(sah_build *b)
 {
@@ -101,7 +70,10 @@ static void *root_axis_events(void *arg)
         r->e[i++] = make_event(round_down(pb.lo.v[r->k]), 1, p) | cls;
         r->e[i++] = make_event(round_up(pb.hi.v[r->k]), 0, p) | cls;
     }
-    radix_sort(r->e, r->tmp, r->m);
+    /* by position, type and cost class (bits EV_CLASS_SHIFT..63) in 3
+     * digits of 12 bits; made in primitive order, so ties stay in it */
+    _Static_assert(EV_CLASS_SHIFT + 3 * 12 == 64, "3 digits cover the bits above the primitive");
+    radix_sort_u64(r->e, r->tmp, r->m, EV_CLASS_SHIFT, 12);
     return NULL;
 }
 
