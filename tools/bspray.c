@@ -542,9 +542,9 @@ static int cmd_stats(int argc, char **argv)
     printf("background: %g %g %g\n", bg[0], bg[1], bg[2]);
     int rc = 0, checked = 0;
     bsp_accel *accel = NULL;
+    bsp_tree_stats t;
     if (want_tree) {
         accel = tree_or_build(&a, scene, &bopts, tree_path);
-        bsp_tree_stats t;
         bsp_accel_tree_stats(accel, &t);
         bsp_accel_kind kind = bsp_accel_get_kind(accel);
         printf("structure: %s%s%s\n", bsp_accel_kind_name(kind), tree_path ? ", loaded from " : "",
@@ -591,7 +591,8 @@ static int cmd_stats(int argc, char **argv)
         }
     }
     if (json_path &&
-        !write_stats_json_file(json_path, scene_path, scene, accel, tree_path, checked))
+        !write_stats_json_file(json_path, scene_path, scene, accel, accel ? &t : NULL, tree_path,
+                               checked))
         rc = EXIT_INPUT;
     bsp_accel_destroy(accel);
     bsp_scene_destroy(scene);

@@ -69,6 +69,8 @@ int cmd_build(int argc, char **argv)
     bsp_accel *accel = build_accel(scene, &bopts);
     bsp_error err;
     int rc = 0;
+    bsp_tree_stats t;
+    bsp_accel_tree_stats(accel, &t);
     if (check && bsp_accel_check(accel, &err) != BSP_OK) {
         fprintf(stderr, "%s: %s: %s\n", prog, scene_path, err.message);
         rc = EXIT_INPUT;
@@ -76,11 +78,9 @@ int cmd_build(int argc, char **argv)
         fprintf(stderr, "%s: %s\n", prog, err.message);
         rc = EXIT_INPUT;
     } else if (json_path &&
-               !write_stats_json_file(json_path, scene_path, scene, accel, NULL, check)) {
+               !write_stats_json_file(json_path, scene_path, scene, accel, &t, NULL, check)) {
         rc = EXIT_INPUT;
     } else if (!quiet) {
-        bsp_tree_stats t;
-        bsp_accel_tree_stats(accel, &t);
         long size = -1;
         FILE *f = fopen(out_path, "rb");
         if (f && fseek(f, 0, SEEK_END) == 0)

@@ -593,7 +593,8 @@ void tree_time_json(FILE *f, const char *indent, const char *tree_path, double s
 }
 
 int write_stats_json_file(const char *path, const char *scene_path, const bsp_scene *scene,
-                          const bsp_accel *accel, const char *tree_path, int checked)
+                          const bsp_accel *accel, const bsp_tree_stats *t, const char *tree_path,
+                          int checked)
 {
     FILE *f = fopen(path, "w");
     if (!f) {
@@ -620,13 +621,11 @@ int write_stats_json_file(const char *path, const char *scene_path, const bsp_sc
     }
     fprintf(f, ",\n  \"lights\": %zu,\n  \"materials\": %zu", bsp_scene_light_count(scene),
             bsp_scene_material_count(scene));
-    if (accel) {
-        bsp_tree_stats t;
-        bsp_accel_tree_stats(accel, &t);
+    if (accel && t) {
         bsp_accel_kind kind = bsp_accel_get_kind(accel);
         fprintf(f, ",\n  \"structure\": {\n");
         tree_time_json(f, "    ", tree_path, bsp_accel_build_seconds(accel));
-        tree_stats_json(f, "    ", &t, kind);
+        tree_stats_json(f, "    ", t, kind);
         if (checked)
             fprintf(f, "    \"invariants\": \"%s\",\n", checked > 0 ? "ok" : "failed");
         fprintf(f, "    \"accel\": \"%s\"\n  }", bsp_accel_kind_name(kind));

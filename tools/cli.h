@@ -139,12 +139,14 @@ void json_real(FILE *f, double x);
 void tree_stats_json(FILE *f, const char *indent, const bsp_tree_stats *t, bsp_accel_kind kind);
 /* The figures of `stats --stats-json` (and `build --stats-json`) in PATH: the
  * scene's (primitives by kind, bounds, lights, materials) and, with ACCEL
- * (or NULL), a "structure" member: T_B or the --tree file TREE_PATH and
+ * (or NULL) and its figures T (bsp_accel_tree_stats, computed once by the
+ * caller), a "structure" member: T_B or the --tree file TREE_PATH and
  * T_load, tree_stats_json's figures, the method, and CHECKED's "invariants"
  * (0: no check, 1: passed, -1: failed). 0 (with a message) when PATH cannot
  * be written. */
 int write_stats_json_file(const char *path, const char *scene_path, const bsp_scene *scene,
-                          const bsp_accel *accel, const char *tree_path, int checked);
+                          const bsp_accel *accel, const bsp_tree_stats *t, const char *tree_path,
+                          int checked);
 
 /* The subcommands. */
 int cmd_bench(int argc, char **argv);
