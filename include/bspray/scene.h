@@ -100,6 +100,21 @@ bsp_status bsp_scene_add_polygon(bsp_scene *scene, const bsp_vec3 *verts, size_t
                           bsp_error *err);
 bsp_status bsp_scene_add_patch(bsp_scene *scene, const bsp_vec3 *verts,
                         const bsp_vec3 *normals, size_t n, bsp_error *err);
+/* Appends an indexed triangle mesh: triangle t (0 <= t < NTRIS) has the
+ * vertices VERTS[INDICES[3t]], VERTS[INDICES[3t + 1]] and
+ * VERTS[INDICES[3t + 2]], in that order, and becomes primitive
+ * bsp_scene_prim_count() + t with the current material: a polygon of three
+ * vertices, or with NORMALS (one per vertex, like VERTS; may be NULL) a
+ * polygonal patch, the very primitive bsp_scene_add_polygon (or _add_patch)
+ * makes of the same three points. Degenerate triangles are recorded as
+ * BSP_PRIM_DROPPED, as there. All or nothing: every vertex (used or not)
+ * must be finite and within BSP_SCENE_MAX_COORD and every index below
+ * NVERTS, else BSP_ERR_INVALID with a message naming the first bad vertex or
+ * triangle, and nothing is added (also on BSP_ERR_LIMIT and BSP_ERR_NOMEM).
+ * NTRIS = 0 adds nothing. */
+bsp_status bsp_scene_add_triangles(bsp_scene *scene, const bsp_vec3 *verts, size_t nverts,
+                                   const bsp_vec3 *normals_or_null, const uint32_t *indices,
+                                   size_t ntris, bsp_error *err);
 bsp_status bsp_scene_add_cone(bsp_scene *scene, bsp_vec3 base, double base_radius,
                        bsp_vec3 apex, double apex_radius, bsp_error *err);
 

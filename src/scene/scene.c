@@ -7,6 +7,7 @@
  * primitive has shape SHAPE_NONE and is counted under BSP_PRIM_DROPPED;
  * bounds always covers every live primitive.
  */
+#include <inttypes.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -275,6 +276,63 @@ bsp_status bsp_scene_add_patch(bsp_scene *s, const bsp_vec3 *verts, const bsp_ve
                                size_t n, bsp_error *err)
 {
     return add_polygonal(s, BSP_PRIM_PATCH, verts, normals, n, err);
+}
+
+bsp_status bsp_scene_add_triangles(bsp_scene *s, const bsp_vec3 *verts, size_t nverts,
+                                   const bsp_vec3 *normals, const uint32_t *indices, size_t ntris,
+                                   bsp_error *err)
+{
+    const char *what = normals ? "triangle mesh (patches)" : "triangle mesh";
+    if (ntris == 0)
+        return BSP_OK;
+    if (!indices || (nverts > 0 && !verts))
+        return scene_fail(s, err, BSP_ERR_INVALID, "%s: NULL vertex or index array", what);
+    if (ntris > SCENE_MAX_PRIMS - s->nprims)
+        return scene_fail(s, err, BSP_ERR_LIMIT,
+                          "%s: %zu triangles after %zu primitives (the limit is %zu)", what, ntris,
+                          s->nprims, SCENE_MAX_PRIMS);
+    if (s->nverts + 3 > SCENE_MAX_TOTAL_VERTS) /* add_polygonal's check, made once */
+        return scene_fail(s, err, BSP_ERR_LIMIT, "more than %zu polygon vertices in all",
+                          SCENE_MAX_TOTAL_VERTS);
+    /* everything checked before anything is added: the mesh goes in whole
+     * or not at all (vertices a triangle does not use are checked too) */
+    for (size_t i = 0; i < nverts; i++) {
+        if (!v3_is_finite(verts[i]) || (normals && !v3_is_finite(normals[i])))
+            return scene_fail(s, err, BSP_ERR_INVALID, "%s: vertex %zu: non-finite number",
+                              what, i);
+        for (int k = 0; k < 3; k++)
+            if (fabs(verts[i].v[k]) > BSP_SCENE_MAX_COORD)
+                return scene_fail(s, err, BSP_ERR_INVALID,
+                                  "%s: vertex %zu: %g is out of range (coordinates must lie "
+                                  "within +-%g)",
+                                  what, i, verts[i].v[k], BSP_SCENE_MAX_COORD);
+    }
+    for (size_t t = 0; t < ntris; t++)
+        for (int c = 0; c < 3; c++)
+            if (indices[3 * t + (size_t)c] >= nverts)
+                return scene_fail(s, err, BSP_ERR_INVALID,
+                                  "%s: triangle %zu: vertex index %" PRIu32
+                                  " is out of range (%zu vertices)",
+                                  what, t, indices[3 * t + (size_t)c], nverts);
+    /* room for all of it, so that no triangle below can fail half-way */
+    if (!GROW(s->prims, s->cap_prims, s->nprims + ntris) ||
+        !GROW(s->triangles, s->cap_triangles, s->ntriangles + ntris) ||
+        (normals && !GROW(s->normals, s->cap_normals, s->nnormals + 3 * ntris)))
+        return scene_fail(s, err, BSP_ERR_NOMEM, "out of memory");
+    for (size_t t = 0; t < ntris; t++) {
+        const uint32_t *ix = indices + 3 * t;
+        const bsp_vec3 v[3] = {verts[ix[0]], verts[ix[1]], verts[ix[2]]};
+        bsp_status st;
+        if (normals) {
+            const bsp_vec3 n[3] = {normals[ix[0]], normals[ix[1]], normals[ix[2]]};
+            st = add_polygonal(s, BSP_PRIM_PATCH, v, n, 3, err);
+        } else {
+            st = add_polygonal(s, BSP_PRIM_POLYGON, v, NULL, 3, err);
+        }
+        if (st != BSP_OK)
+            return st; /* cannot happen: checked and reserved above */
+    }
+    return BSP_OK;
 }
 
 bsp_status bsp_scene_add_cone(bsp_scene *s, bsp_vec3 base, double base_radius, bsp_vec3 apex,
