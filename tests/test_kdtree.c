@@ -18,6 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "accel/grid.h"
 #include "accel/kd_tree.h"
 #include "bspray/bspray.h"
 #include "geom/vec.h"
@@ -40,13 +41,24 @@ typedef struct plane_list {
     int n;
 } plane_list;
 
-static void collect_planes(const bsp_accel *a, plane_list *pl)
+/* Appends A's planes to PL, up to LIMIT in all: a kd-tree's split planes,
+ * a grid's cell boundaries. */
+static void collect_planes(const bsp_accel *a, plane_list *pl, int limit)
 {
-    pl->n = 0;
     if (bsp_accel_get_kind(a) == BSP_ACCEL_NAIVE)
         return;
+    if (bsp_accel_get_kind(a) == BSP_ACCEL_GRID) {
+        const grid *g = a->impl;
+        for (unsigned k = 0; k < 3; k++)
+            for (int i = 0; i <= g->res[k] && pl->n < limit; i++) {
+                pl->axis[pl->n] = k;
+                pl->value[pl->n] = grid_plane(g, k, i);
+                pl->n++;
+            }
+        return;
+    }
     const kd_tree *t = a->impl;
-    for (uint32_t i = 0; i < t->nnodes && pl->n < 4096; i++) {
+    for (uint32_t i = 0; i < t->nnodes && pl->n < limit; i++) {
         if (!kd_is_leaf(&t->nodes[i])) {
             pl->axis[pl->n] = kd_axis(&t->nodes[i]);
             pl->value[pl->n] = (double)t->nodes[i].u.split;
@@ -121,8 +133,8 @@ static int quick_skips_view_variant(const bsp_scene *scene, int kind, int mailbo
            bsp_scene_prim_count(scene) > 2000;
 }
 
-/* The kd variants the exactness tests compare with naive: every kd rule
- * with and without mailboxes, sah-mixed's three models among them (sampled
+/* The variants the exactness tests compare with naive: every kd rule, and
+ * the uniform grid (the last kind), with and without mailboxes, sah-mixed's three models among them (sampled
  * without mailboxes, surface and counted with them), each sah-mixed tree
  * kept whatever its check against sah would choose. Fills O[0..n), returns
  * n (at most KD_VARIANTS_MAX). */
@@ -200,8 +212,14 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
         g.box.lo = bsp_v3(-1, -1, -1);
         g.box.hi = bsp_v3(1, 1, 1);
     }
+    /* the planes of the last kd-tree and of the grid (the last variant) */
+    for (int v = nv - 1; v >= 0; v--)
+        if (bsp_accel_get_kind(acc[v]) != BSP_ACCEL_GRID) {
+            collect_planes(acc[v], &g.planes, 3072);
+            break;
+        }
     if (nv > 0)
-        collect_planes(acc[nv - 1], &g.planes);
+        collect_planes(acc[nv - 1], &g.planes, 4096);
     rng = seed;
     int bad = 0, hits = 0, from_checked = 0;
     for (int i = 0; i < nrays && bad < 5; i++) {

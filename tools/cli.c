@@ -485,9 +485,35 @@ void apply_cost_args(const cost_args *c, bsp_build_options *o)
     o->sah_straddle_twice = c->straddle_twice;
 }
 
+static int in_density_range(double x)
+{
+    return x > 0.0 && x <= 1e6;
+}
+
+/* --grid-res X,Y,Z: three whole numbers in 1..BSP_GRID_MAX_RES. */
+static void parse_grid_res(args *a, const char *opt, int res[3])
+{
+    const char *v = opt_value(a, opt), *p = v;
+    for (int k = 0; k < 3; k++) {
+        char *end;
+        errno = 0;
+        long x = strtol(p, &end, 10);
+        if (errno || end == p || x < 1 || x > BSP_GRID_MAX_RES || *end != (k < 2 ? ',' : '\0')) {
+            char msg[160];
+            snprintf(msg, sizeof msg,
+                     "option '%s' needs three whole numbers X,Y,Z from 1 to %d, got '%%s'", opt,
+                     BSP_GRID_MAX_RES);
+            die_usage(a->usage, msg, v);
+        }
+        res[k] = (int)x;
+        p = end + 1;
+    }
+}
+
 const char build_args_help[] =
     "  --accel METHOD     acceleration method: sah (default), sah-per, sah-par, sah-mixed,\n"
-    "                     kaplan, naive (sah-per/-par/-mixed build for the camera's rays)\n"
+    "                     kaplan, grid (a uniform grid), naive (sah-per/-par/-mixed build\n"
+    "                     for the camera's rays)\n"
     "  --mailbox on|off   test each primitive at most once per ray (default on)\n"
     "  --max-depth N      kd-tree: deepest leaf (default kaplan 18, sah round(8 + 1.3 log2 N))\n"
     "  --leaf-size N      kd-tree: a node of at most N primitives is a leaf (default kaplan\n"
@@ -505,7 +531,10 @@ const char build_args_help[] =
     "  --build-threads N  sah family: build threads (default: every core); the tree is\n"
     "                     the same for any N\n"
     "  --max-tree-mb N    kd-tree: fail when the nodes and leaf lists need more than N MiB\n"
-    "                     (default: half the machine's memory)\n" COST_ARGS_HELP;
+    "                     (default: half the machine's memory)\n"
+    "  --grid-density D   grid: about D cells per primitive, cubic cells over the scene's\n"
+    "                     box, 0 < D <= 1e6 (default 4; Havran's tables use 1 and 10)\n"
+    "  --grid-res X,Y,Z   grid: exactly these cells per axis (overrides --grid-density)\n" COST_ARGS_HELP;
 
 int parse_build_arg(args *a, bsp_build_options *opts)
 {
@@ -536,6 +565,11 @@ int parse_build_arg(args *a, bsp_build_options *opts)
                        opts->sah_budget_cut, opts->sah_straddle_twice};
         parse_cost_arg(a, &c);
         apply_cost_args(&c, opts);
+    } else if (!strcmp(s, "--grid-density")) {
+        opts->grid_density =
+            parse_real(a, s, opt_value(a, s), in_density_range, "a number in (0, 1e6]");
+    } else if (!strcmp(s, "--grid-res")) {
+        parse_grid_res(a, s, opts->grid_res);
     } else if (!strcmp(s, "--mixed-share")) {
         opts->mixed_primary_share =
             parse_real(a, s, opt_value(a, s), in_share_range, "a number in (0, 1]");

@@ -36,8 +36,17 @@ typedef enum bsp_accel_kind {
                             projection): projected area along it, clipped to the window */
     BSP_ACCEL_SAH_MIXED, /* kd-tree, SAH whose probability mixes the PER measure (primary
                             rays) and the surface area (all other rays) by their share */
+    BSP_ACCEL_GRID,      /* uniform grid (Fujimoto et al. 1986), traversed by a 3D-DDA
+                            (Amanatides & Woo 1987): the classic baseline of Havran's
+                            grid statistics; see bsp_build_options.grid_density */
     BSP_ACCEL_KIND_COUNT
 } bsp_accel_kind;
+
+/* The grid's default cells per primitive, its most cells per axis, and its
+ * most cells in all (a finer grid is coarsened to fit, keeping its shape). */
+#define BSP_GRID_DEFAULT_DENSITY 4.0
+#define BSP_GRID_MAX_RES 4096
+#define BSP_GRID_MAX_CELLS ((uint64_t)1 << 27)
 
 /* Hard ceiling of kd-tree depth (it sizes the traversal stack). */
 #define BSP_KD_MAX_DEPTH_LIMIT 64
@@ -150,6 +159,11 @@ typedef struct bsp_build_options {
                               take; a build that needs more fails with BSP_ERR_LIMIT
                               (deep trees of overlapping primitives grow as 2^depth).
                               0 (default): half the machine's physical memory */
+    double grid_density;   /* grid: about this many cells per primitive, cubic cells over
+                              the scene's box (each axis at least 1 cell); 0: the default
+                              (BSP_GRID_DEFAULT_DENSITY) */
+    int grid_res[3];       /* grid: the cells per axis, overriding grid_density when all
+                              three are > 0 (each at most BSP_GRID_MAX_RES) */
     void (*progress)(double done, void *ctx); /* NULL (default), or called now and then on
                               the thread that calls bsp_accel_build with the share of the
                               tree built, in [0, 1], and with 1 when the build is done.
@@ -233,7 +247,10 @@ typedef struct bsp_tree_stats {
     uint64_t trace_bytes; /* kd-tree: the traversal's copies, beside bytes: the
                              primitives in leaf order, its leaf lists in that
                              numbering, and the nodes with empty-child flags */
-    double expected_cost; /* SAH cost of the finished tree (traversal 1, intersection 1) */
+    int grid_res[3];      /* grid: its cells per axis (N_V is their product); else 0 */
+    double expected_cost; /* SAH cost of the finished tree (traversal 1, intersection 1);
+                             NaN for a grid (expected_cost and model_cost are the
+                             kd-trees' cost model) */
     double model_cost;    /* the same under the build's cost model: C_trav per interior
                              node, T_i per reference (bsp_build_options.sah_costs resolved:
                              the calibrated defaults where 0, also for kaplan), surface

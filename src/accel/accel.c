@@ -6,12 +6,13 @@
 #include <string.h>
 #include <time.h>
 
+#include "accel/grid.h"
 #include "accel/kd_cost.h"
 #include "accel/kd_mixed_check.h"
 #include "accel/kd_tree.h"
 
-static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {"naive",   "kaplan",  "sah",
-                                                                 "sah-per", "sah-par", "sah-mixed"};
+static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {
+    "naive", "kaplan", "sah", "sah-per", "sah-par", "sah-mixed", "grid"};
 
 double accel_now(void)
 {
@@ -83,6 +84,9 @@ bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts
         if (st == BSP_OK && a->opts.kind == BSP_ACCEL_SAH_MIXED && a->opts.mixed_check)
             st = kd_mixed_check(a, err);
         break;
+    case BSP_ACCEL_GRID:
+        st = grid_build(a, err);
+        break;
     default:
         st = error_set(err, BSP_ERR_INVALID, NULL, 0, "unknown acceleration method %d",
                        (int)a->opts.kind);
@@ -131,6 +135,10 @@ void bsp_accel_tree_stats(const bsp_accel *a, bsp_tree_stats *st)
         memset(st, 0, sizeof *st);
         return;
     }
+    if (a->opts.kind == BSP_ACCEL_GRID) {
+        grid_stats(a->impl, st);
+        return;
+    }
     kd_cost_model m;
     kd_cost_resolve(&a->opts, &m);
     kd_tree_stats(a->impl, a->scene, &m.c, st);
@@ -140,6 +148,8 @@ bsp_status bsp_accel_check(const bsp_accel *a, bsp_error *err)
 {
     if (a->opts.kind == BSP_ACCEL_NAIVE)
         return BSP_OK;
+    if (a->opts.kind == BSP_ACCEL_GRID)
+        return grid_check(a->impl, a->scene, err);
     return kd_tree_check(a->impl, a->scene, err);
 }
 
@@ -149,6 +159,8 @@ bsp_status bsp_accel_visit_cells(const bsp_accel *a, int max_depth,
 {
     if (a->opts.kind == BSP_ACCEL_NAIVE)
         return BSP_OK;
+    if (a->opts.kind == BSP_ACCEL_GRID)
+        return grid_visit(a->impl, visit, ctx);
     return kd_tree_visit(a->impl, max_depth, visit, ctx, err);
 }
 

@@ -36,6 +36,33 @@ struct bsp_query {
     uint32_t ray_id;
 };
 
+/* Starts a new ray in Q's mailbox (NPRIMS stamps): returns its stamp (0
+ * without a mailbox). */
+static inline uint32_t query_mailbox_next(bsp_query *q, size_t nprims)
+{
+    if (!q->stamp)
+        return 0;
+    if (++q->ray_id == 0) { /* wrapped: forget every old stamp */
+        for (size_t i = 0; i < nprims; i++)
+            q->stamp[i] = 0;
+        q->ray_id = 1;
+    }
+    return q->ray_id;
+}
+
+/* Adds one query's counts to Q: INTERIOR nodes and LEAVES (cells) visited,
+ * NONEMPTY of them with entries, REFS entries met (tested or skipped by the
+ * mailbox), TESTS intersection tests. */
+static inline void query_count(bsp_query *q, uint64_t interior, uint64_t leaves,
+                               uint64_t nonempty, uint64_t refs, uint64_t tests)
+{
+    q->counters.traversal_steps += interior + leaves;
+    q->counters.isect_tests += tests;
+    q->counters.leaves_visited += leaves;
+    q->counters.empty_leaves += leaves - nonempty;
+    q->counters.mailbox_hits += refs - tests;
+}
+
 /* Builds the naive method (no structure; tests every live primitive). */
 HIDDEN bsp_status naive_build(bsp_accel *a, bsp_error *err);
 /* The naive method's queries on SCENE: the reference answers, also taken by

@@ -49,7 +49,7 @@ static void walk_segment(const kd_flux *f, const kd_flux_segment *s, double *acc
     for (int k = 0; k < 3; k++)
         if (!isfinite(o[k]) || !isfinite(d[k]))
             return;
-    if (!kd_segment_clip(o, d, &f->box, &t0, &t1) || !(t0 < t1) || !isfinite(t1))
+    if (!line_clip_box(o, d, &f->box, &t0, &t1) || !(t0 < t1) || !isfinite(t1))
         return;
     /* an end point lies inside the box when clipping left its t alone */
     const int start_inside = t0 == s->t0, end_inside = t1 == s->t1;

@@ -16,7 +16,7 @@
 static int clip_part(const double od[6], const bsp_box *b, double *ta, double *tb)
 {
     double a = *ta, e = *tb;
-    if (!kd_segment_clip(od, od + 3, b, &a, &e) || !(a <= e))
+    if (!line_clip_box(od, od + 3, b, &a, &e) || !(a <= e))
         return 0;
     *ta = a;
     *tb = e;

@@ -133,19 +133,6 @@ static inline int in_domain(const bsp_scene *s, const trav_ray *r)
     return scene_ray_in_domain(s, r->o, dd);
 }
 
-/* Starts a new ray in the mailbox: returns its stamp. */
-static inline uint32_t mailbox_next(bsp_query *q, size_t nprims)
-{
-    if (!q->stamp)
-        return 0;
-    if (++q->ray_id == 0) { /* wrapped: forget every old stamp */
-        for (size_t i = 0; i < nprims; i++)
-            q->stamp[i] = 0;
-        q->ray_id = 1;
-    }
-    return q->ray_id;
-}
-
 /* The t where the ray crosses the plane S on AXIS (d[axis] != 0). */
 static inline __attribute__((always_inline)) double crossing_t(const trav_ray *r, unsigned axis,
                                                                double s)
@@ -332,18 +319,6 @@ static inline size_t pop_exit(double en[3], exit_point **ex)
     return x->node;
 }
 
-/* Adds one query's counts to Q. REFS: leaf entries met (tested or skipped by
- * the mailbox). */
-static inline void count(bsp_query *q, uint64_t interior, uint64_t leaves, uint64_t nonempty,
-                         uint64_t refs, uint64_t tests)
-{
-    q->counters.traversal_steps += interior + leaves;
-    q->counters.isect_tests += tests;
-    q->counters.leaves_visited += leaves;
-    q->counters.empty_leaves += leaves - nonempty;
-    q->counters.mailbox_hits += refs - tests;
-}
-
 /* The local number of primitive FROM, which a query leaves out
  * (bsp_intersect_from), or UINT32_MAX: no leaf lists it, or FROM names no
  * primitive. With the mailbox its stamp is set before the first leaf, so it
@@ -368,7 +343,7 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t 
         return naive_scene_intersect(s, q, ray, from, hit);
     if (!start(t, ray, &tr, en, stack))
         return 0;
-    uint32_t stamp = mailbox_next(q, s->nprims);
+    uint32_t stamp = query_mailbox_next(q, s->nprims);
     uint32_t *mbox = q->stamp;
     const uint32_t skip = left_out(t, from);
     if (mbox && skip != UINT32_MAX)
@@ -425,7 +400,7 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t 
             break; /* the closest hit lies inside this cell, or this is the last cell */
         off = pop_exit(en, &ex);
     }
-    count(q, interior, leaves, nonempty, refs, tests);
+    query_count(q, interior, leaves, nonempty, refs, tests);
     if (best_p == BSP_NO_PRIM)
         return 0;
     scene_hit_finish(&best, best_p, hit);
@@ -444,7 +419,7 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t f
         return naive_scene_occluded(s, q, ray, from);
     if (!start(t, ray, &tr, en, stack))
         return 0;
-    uint32_t stamp = mailbox_next(q, s->nprims);
+    uint32_t stamp = query_mailbox_next(q, s->nprims);
     uint32_t *mbox = q->stamp;
     const uint32_t skip = left_out(t, from);
     if (mbox && skip != UINT32_MAX)
@@ -491,6 +466,6 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t f
             break; /* the ray leaves the root box */
         off = pop_exit(en, &ex);
     }
-    count(q, interior, leaves, nonempty, refs, tests);
+    query_count(q, interior, leaves, nonempty, refs, tests);
     return found;
 }

@@ -16,6 +16,7 @@
 #include "geom/vec.h"
 #include "util/bigmem.h"
 #include "util/sort.h"
+#include "util/fnv.h"
 
 int kd_tree_init(kd_tree *t, const bsp_scene *scene, int max_depth, int max_leaf_prims)
 {
@@ -233,22 +234,11 @@ static void stats_node(stats_walk *w, uint32_t i, bsp_box box, int depth)
     stats_node(w, kd_child(n) + 1, r, depth + 1);
 }
 
-/* FNV-1a (64 bits) of H extended by the 4 bytes of X, least significant
- * first (the same digest on every byte order). */
-static uint64_t fnv1a_u32(uint64_t h, uint32_t x)
-{
-    for (int i = 0; i < 4; i++) {
-        h ^= (x >> (8 * i)) & 0xffu;
-        h *= 1099511628211ull;
-    }
-    return h;
-}
-
 /* The tree's digest (bsp_tree_stats.digest): every node's two words in
  * array order, then the leaf lists. */
 static uint64_t tree_digest(const kd_tree *t)
 {
-    uint64_t h = 14695981039346656037ull;
+    uint64_t h = FNV1A_BASIS;
     for (uint32_t i = 0; i < t->nnodes; i++) {
         uint32_t word;
         memcpy(&word, &t->nodes[i].u, sizeof word); /* the split's bits or the first entry */

@@ -100,6 +100,33 @@ static inline bsp_box box_grow(bsp_box b, double d)
     }
     return b;
 }
+/* Clips the parameter interval [*T0, *T1] of the line O + t D to box B
+ * (slab by slab; max and min do not round, and the slab parameters of
+ * nested boxes are nested, so clipping in steps gives what clipping at once
+ * gives). 0 when a zero component of D leaves the line outside B's slab;
+ * otherwise 1 (the interval may have become empty: *T0 > *T1). */
+static inline int line_clip_box(const double o[3], const double d[3], const bsp_box *b,
+                                double *t0, double *t1)
+{
+    for (int k = 0; k < 3; k++) {
+        double lo = b->lo.v[k], hi = b->hi.v[k];
+        if (d[k] == 0.0) {
+            if (o[k] < lo || o[k] > hi)
+                return 0;
+            continue;
+        }
+        double ta = (lo - o[k]) / d[k], tb = (hi - o[k]) / d[k];
+        if (ta > tb) {
+            double x = ta;
+            ta = tb;
+            tb = x;
+        }
+        *t0 = ta > *t0 ? ta : *t0;
+        *t1 = tb < *t1 ? tb : *t1;
+    }
+    return 1;
+}
+
 static inline bsp_box box_add_point(bsp_box a, bsp_vec3 p)
 {
     bsp_box r;
