@@ -114,6 +114,14 @@ long harness_count_color(const struct bsp_image *img, int i);
         }                                                                                   \
     } while (0)
 
+#define REQUIRE_MSG(cond, ...)                                                              \
+    do {                                                                                    \
+        if (!(cond)) {                                                                      \
+            harness_fail(__FILE__, __LINE__, __VA_ARGS__);                                  \
+            harness_abort_test();                                                           \
+        }                                                                                   \
+    } while (0)
+
 #define CHECK_EQ_INT(a, b)                                                                  \
     do {                                                                                    \
         long long check_a_ = (long long)(a), check_b_ = (long long)(b);                     \

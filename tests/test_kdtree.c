@@ -155,6 +155,8 @@ static int kd_variants(bsp_build_options *o)
                                : v == 1 ? BSP_MIXED_SURFACE
                                         : BSP_MIXED_COUNTED;
             o[n].mixed_check = 0;
+            o[n].grid_assign_bounds = v == 0; /* the grid: Havran's assignment without
+                                                 mailboxes, the clipped one with */
             n++;
         }
     }

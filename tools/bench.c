@@ -375,7 +375,7 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     row.t_build = bsp_accel_build_seconds(accel);
     row.t_build_n = row.t_build;
     bsp_accel_tree_stats(accel, &row.tree);
-    if (o->threads > 1 && kind != BSP_ACCEL_NAIVE && kind != BSP_ACCEL_KAPLAN) {
+    if (o->threads > 1 && kind_builds_in_parallel(kind)) {
         bo.threads = o->threads; /* the same tree, on all threads: checked by its digest */
         bsp_accel *again = build_accel(scene, &bo);
         row.t_build_n = bsp_accel_build_seconds(again);

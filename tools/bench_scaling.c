@@ -155,11 +155,6 @@ static void timed_builds(const scaling_opts *o, const bsp_scene *scene, scaling_
     }
 }
 
-static int builds_in_parallel(bsp_accel_kind k)
-{
-    return k != BSP_ACCEL_NAIVE && k != BSP_ACCEL_KAPLAN;
-}
-
 static void measure(const scaling_opts *o, const bsp_scene *scene, scaling_row *r)
 {
     r->builds = o->repeat;
@@ -167,7 +162,7 @@ static void measure(const scaling_opts *o, const bsp_scene *scene, scaling_row *
         r->builds = SCALING_BIG_REPEAT;
     timed_builds(o, scene, r, 1, &r->t1_cpu, &r->t1_wall);
     r->tn_wall = r->t1_wall;
-    if (o->threads > 1 && builds_in_parallel(r->kind)) {
+    if (o->threads > 1 && kind_builds_in_parallel(r->kind)) {
         double cpu_unused;
         timed_builds(o, scene, r, o->threads, &cpu_unused, &r->tn_wall);
     }
@@ -198,11 +193,14 @@ static void print_header(int threads)
 
 static void print_row(const scaling_row *r)
 {
+    char cost[32] = "–"; /* a grid has no SAH cost */
+    if (isfinite(r->tree.expected_cost))
+        snprintf(cost, sizeof cost, "%.2f", r->tree.expected_cost);
     printf("| %s | %s | %zu | %.4g | %.3f | %.2f | %.4g | %.4g | %.2f | %" PRIu64 " | %" PRIu64
-           " | %" PRIu64 " | %.2f | %.2f |\n",
+           " | %" PRIu64 " | %s | %.2f |\n",
            r->scene, bsp_accel_kind_name(r->kind), r->n, r->t1_cpu, us_per_prim(r),
-           mprim_per_s(r), r->t1_first, r->tn_wall, speedup(r), r->tree.interior_nodes, r->tree.leaves,
-           r->tree.references, r->tree.expected_cost,
+           mprim_per_s(r), r->t1_first, r->tn_wall, speedup(r), r->tree.interior_nodes,
+           r->tree.leaves, r->tree.references, cost,
            (double)(r->tree.bytes + r->tree.trace_bytes) / (1024.0 * 1024.0));
     fflush(stdout);
 }

@@ -564,11 +564,16 @@ static int cmd_stats(int argc, char **argv)
                    "                 order, the leaf lists in that numbering, the nodes\n"
                    "                 with empty-child flags)\n",
                    t.trace_bytes);
-        printf("  expected cost  %.3f (SAH, traversal and intersection cost 1)\n",
-               t.expected_cost);
-        printf("  model cost     %.3f (SAH under the build's costs, in traversal steps; no\n"
-               "                 mailbox term)\n",
-               t.model_cost);
+        if (kind == BSP_ACCEL_GRID) {
+            printf("  resolution     %d x %d x %d cells\n", t.grid_res[0], t.grid_res[1],
+                   t.grid_res[2]);
+        } else {
+            printf("  expected cost  %.3f (SAH, traversal and intersection cost 1)\n",
+                   t.expected_cost);
+            printf("  model cost     %.3f (SAH under the build's costs, in traversal steps; no\n"
+                   "                 mailbox term)\n",
+                   t.model_cost);
+        }
         if (kind != BSP_ACCEL_NAIVE)
             printf("  digest         %016" PRIx64 " (nodes and leaf lists hashed: equal digests,\n"
                "                 the same tree bit for bit)\n",

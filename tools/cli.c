@@ -301,6 +301,11 @@ void json_real(FILE *f, double x)
     fputs(buf, f);
 }
 
+int kind_builds_in_parallel(bsp_accel_kind k)
+{
+    return k != BSP_ACCEL_NAIVE && k != BSP_ACCEL_KAPLAN && k != BSP_ACCEL_GRID;
+}
+
 void tree_stats_json(FILE *f, const char *indent, const bsp_tree_stats *t, bsp_accel_kind kind)
 {
     fprintf(f,
@@ -326,6 +331,9 @@ void tree_stats_json(FILE *f, const char *indent, const bsp_tree_stats *t, bsp_a
     else
         fprintf(f, "\"%016" PRIx64 "\"", t->digest);
     fputs(",\n", f);
+    if (kind == BSP_ACCEL_GRID)
+        fprintf(f, "%s\"grid_res\": [%d, %d, %d],\n", indent, t->grid_res[0], t->grid_res[1],
+                t->grid_res[2]);
 }
 
 /* The number TEXT of option OPT, or a usage error saying WHAT it must be
@@ -534,7 +542,10 @@ const char build_args_help[] =
     "                     (default: half the machine's memory)\n"
     "  --grid-density D   grid: about D cells per primitive, cubic cells over the scene's\n"
     "                     box, 0 < D <= 1e6 (default 4; Havran's tables use 1 and 10)\n"
-    "  --grid-res X,Y,Z   grid: exactly these cells per axis (overrides --grid-density)\n" COST_ARGS_HELP;
+    "  --grid-res X,Y,Z   grid: exactly these cells per axis (overrides --grid-density)\n"
+    "  --grid-assign clipped|bounds  grid: a primitive goes in the cells its part reaches\n"
+    "                     (clipped, default) or in every cell its bounds overlap (bounds:\n"
+    "                     Havran's 1999 grids; see docs/grid.md)\n" COST_ARGS_HELP;
 
 int parse_build_arg(args *a, bsp_build_options *opts)
 {
@@ -568,6 +579,8 @@ int parse_build_arg(args *a, bsp_build_options *opts)
     } else if (!strcmp(s, "--grid-density")) {
         opts->grid_density =
             parse_real(a, s, opt_value(a, s), in_density_range, "a number in (0, 1e6]");
+    } else if (!strcmp(s, "--grid-assign")) {
+        opts->grid_assign_bounds = parse_one_of_two(a, s, "clipped", "bounds");
     } else if (!strcmp(s, "--grid-res")) {
         parse_grid_res(a, s, opts->grid_res);
     } else if (!strcmp(s, "--mixed-share")) {

@@ -164,6 +164,10 @@ typedef struct bsp_build_options {
                               (BSP_GRID_DEFAULT_DENSITY) */
     int grid_res[3];       /* grid: the cells per axis, overriding grid_density when all
                               three are > 0 (each at most BSP_GRID_MAX_RES) */
+    int grid_assign_bounds; /* grid: 0 (default) lists a primitive in the cells its part
+                              reaches (clipped to each cell, as the kd-trees' perfect
+                              splits); 1 in every cell its bounds overlap (padded), as
+                              Havran's 1999 grids did */
     void (*progress)(double done, void *ctx); /* NULL (default), or called now and then on
                               the thread that calls bsp_accel_build with the share of the
                               tree built, in [0, 1], and with 1 when the build is done.

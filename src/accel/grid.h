@@ -8,7 +8,8 @@
  *
  * Assignment invariant (the kd-trees', kd_tree.h): a primitive is listed in
  * every cell that its padded bounds, clipped to the cell grown by the
- * padding (kd_clip.h), overlap; so it is listed in every cell whose closed
+ * padding (kd_clip.h), overlap (or, with grid_assign_bounds, every cell its
+ * padded bounds overlap: a superset); so it is listed in every cell whose closed
  * box it touches, and the traversal, which stops once the closest hit lies
  * at or before the current cell's exit, answers exactly as the naive method,
  * ties at equal t included (the lower index wins).
@@ -29,6 +30,7 @@ typedef struct grid {
     bsp_box box;      /* the scene's bounds grown by pad (empty for a scene of
                          no live primitive) */
     double pad;       /* the kd-trees' padding (KD_PAD_REL of the scene scale) */
+    int by_bounds;    /* bsp_build_options.grid_assign_bounds: no clipping */
     int res[3];       /* cells per axis */
     double cell[3];   /* a cell's extent per axis */
     uint64_t ncells;  /* res[0] * res[1] * res[2] */

@@ -15,7 +15,9 @@
  * to each (kd_clip_prim_bounded: its part in the cell grown by the padding)
  * and listed where the part's bounds overlap the cell — the kd-trees'
  * perfect-split assignment, so a large polygon is not listed in the cells of
- * its bounds it does not reach. (cell, primitive) pairs are made in
+ * its bounds it does not reach. With grid_assign_bounds it is listed in
+ * every cell its padded bounds overlap, as Havran's grids listed them (his
+ * figures are reproduced that way: docs/grid.md). (cell, primitive) pairs are made in
  * primitive order and counted into the cells' lists, so each list is in
  * increasing primitive order.
  */
@@ -100,7 +102,7 @@ static int for_each_cell(const grid *g, const bsp_scene *scene, uint32_t p, bsp_
                          kd_clip_scratch *scr, int (*add)(void *ctx, uint64_t cell), void *ctx)
 {
     int lo[3], hi[3], c[3];
-    const int single = candidate_cells(g, b, g->pad, lo, hi);
+    const int single = candidate_cells(g, b, g->pad, lo, hi) || g->by_bounds;
     for (c[2] = lo[2]; c[2] <= hi[2]; c[2]++)
         for (c[1] = lo[1]; c[1] <= hi[1]; c[1]++)
             for (c[0] = lo[0]; c[0] <= hi[0]; c[0]++) {
@@ -199,6 +201,7 @@ bsp_status grid_build(bsp_accel *a, bsp_error *err)
     for (size_t p = 0; p < np; p++)
         n += scene->prims[p].shape != SHAPE_NONE;
     g->pad = KD_PAD_REL * scene_scale(scene);
+    g->by_bounds = a->opts.grid_assign_bounds != 0;
     bsp_box b = bsp_scene_bounds(scene);
     g->box = n == 0 || box_is_empty(b) ? (bsp_box){{{0, 0, 0}}, {{1, 1, 1}}} : box_grow(b, g->pad);
     bsp_status st = resolution(g, &a->opts, n, err);
