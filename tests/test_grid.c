@@ -209,3 +209,47 @@ TEST(grid_rays_match_havrans_on_balls)
     bsp_accel_destroy(a);
     bsp_scene_destroy(s);
 }
+
+typedef struct visit_count {
+    uint64_t nodes, planes, leaves, refs;
+    double volume;
+} visit_count;
+
+static int count_visit(const bsp_cell_info *c, void *ctx)
+{
+    visit_count *v = ctx;
+    v->nodes++;
+    if (c->is_leaf) {
+        v->leaves++;
+        v->refs += c->refs;
+        v->volume += (c->box.hi.x - c->box.lo.x) * (c->box.hi.y - c->box.lo.y) *
+                     (c->box.hi.z - c->box.lo.z);
+    } else if (c->depth == 1) {
+        v->planes++;
+    }
+    return 1;
+}
+
+TEST(grid_visit_reports_the_box_its_planes_and_its_cells)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load("spd:rings", &s, &err) == BSP_OK);
+    const int res[3] = {5, 7, 3};
+    bsp_accel *a = grid_of(s, 0.0, res, 1, 0);
+    visit_count v = {0, 0, 0, 0, 0.0};
+    REQUIRE(bsp_accel_visit_cells(a, -1, count_visit, &v, &err) == BSP_OK);
+    bsp_tree_stats st;
+    bsp_accel_tree_stats(a, &st);
+    CHECK(v.leaves == 105 && v.planes == 4 + 6 + 2 && v.nodes == 1 + 12 + 105);
+    CHECK(v.refs == st.references);
+    visit_count root = {0, 0, 0, 0, 0.0};
+    REQUIRE(bsp_accel_visit_cells(a, 0, count_visit, &root, &err) == BSP_OK);
+    CHECK(root.nodes == 1);
+    /* the cells tile the box */
+    bsp_box b = bsp_scene_bounds(s);
+    double vol = (b.hi.x - b.lo.x) * (b.hi.y - b.lo.y) * (b.hi.z - b.lo.z);
+    CHECK_MSG(fabs(v.volume / vol - 1.0) < 1e-6, "cells %.17g, box %.17g", v.volume, vol);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}

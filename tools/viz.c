@@ -47,8 +47,8 @@ static const char viz_help[] =
     "\n"
     "  -o FILE          output image, (2 x SIZE) by (methods x SIZE) pixels; .ppm writes\n"
     "                   binary PPM, anything else PNG (required)\n"
-    "  --accel LIST     comma-separated kd-tree methods, one row each: kaplan, sah,\n"
-    "                   sah-per, sah-par, sah-mixed (default sah)\n"
+    "  --accel LIST     comma-separated methods, one row each: kaplan, sah, sah-per,\n"
+    "                   sah-par, sah-mixed (default sah), or grid (its default density)\n"
     "  --max-depth N    the trees' maximum depth (default 10, the paper's setting for\n"
     "                   its pictures); also the end of the depth colour scale\n"
     "  --leaf-size N    a node with at most N primitives becomes a leaf (default: the\n"
@@ -194,7 +194,7 @@ int cmd_viz(int argc, char **argv)
         if (rows[r].kind == BSP_ACCEL_NAIVE) {
             fprintf(stderr,
                     "%s: viz: the naive method has no tree, so no cells to draw; "
-                    "use kaplan, sah, sah-per, sah-par or sah-mixed\n",
+                    "use kaplan, sah, sah-per, sah-par, sah-mixed or grid\n",
                     prog);
             return EXIT_INPUT;
         }

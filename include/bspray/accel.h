@@ -292,8 +292,11 @@ typedef struct bsp_cell_info {
 /* Calls VISIT for every node of a kd-tree in depth-first order (a node
  * before its children, left before right), not descending below depth
  * MAX_DEPTH (negative: the whole tree). VISIT returns 0 to skip the node's
- * children. Nothing is visited for the naive method. Returns BSP_ERR_NOMEM
- * when out of memory, else BSP_OK. */
+ * children. Nothing is visited for the naive method. A grid is visited as a
+ * tree of two levels: its box (depth 0, not a leaf, with its low x face as
+ * the "split"), then each plane between cells spanning the box (depth 1,
+ * not a leaf), then each cell (depth 1, a leaf; in x, then y, then z order).
+ * Returns BSP_ERR_NOMEM when out of memory, else BSP_OK. */
 bsp_status bsp_accel_visit_cells(const bsp_accel *accel, int max_depth,
                                  int (*visit)(const bsp_cell_info *cell, void *ctx), void *ctx,
                                  bsp_error *err);

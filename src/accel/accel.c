@@ -160,7 +160,7 @@ bsp_status bsp_accel_visit_cells(const bsp_accel *a, int max_depth,
     if (a->opts.kind == BSP_ACCEL_NAIVE)
         return BSP_OK;
     if (a->opts.kind == BSP_ACCEL_GRID)
-        return grid_visit(a->impl, visit, ctx);
+        return grid_visit(a->impl, max_depth, visit, ctx);
     return kd_tree_visit(a->impl, max_depth, visit, ctx, err);
 }
 

@@ -71,9 +71,9 @@ HIDDEN bsp_status grid_build(bsp_accel *a, bsp_error *err);
 HIDDEN void grid_stats(const grid *g, bsp_tree_stats *st);
 /* The assignment invariant above, checked cell by cell. */
 HIDDEN bsp_status grid_check(const grid *g, const bsp_scene *scene, bsp_error *err);
-/* Visits each cell (depth 0, a leaf) in index order. */
-HIDDEN bsp_status grid_visit(const grid *g, int (*visit)(const bsp_cell_info *cell, void *ctx),
-                             void *ctx);
+/* Visits the grid as bsp_accel_visit_cells describes it (accel.h). */
+HIDDEN bsp_status grid_visit(const grid *g, int max_depth,
+                             int (*visit)(const bsp_cell_info *cell, void *ctx), void *ctx);
 
 /* The queries (grid_traverse.c), for accel_ops. */
 HIDDEN int grid_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,

@@ -350,17 +350,34 @@ bsp_status grid_check(const grid *g, const bsp_scene *scene, bsp_error *err)
     return st;
 }
 
-bsp_status grid_visit(const grid *g, int (*visit)(const bsp_cell_info *cell, void *ctx),
-                      void *ctx)
+bsp_status grid_visit(const grid *g, int max_depth,
+                      int (*visit)(const bsp_cell_info *cell, void *ctx), void *ctx)
 {
+    /* the box, as a root whose "split" is its own low x face (a plane that
+     * draws as the box's face); then each plane between cells, spanning the
+     * box; then the cells */
+    bsp_cell_info info;
+    memset(&info, 0, sizeof info);
+    info.box = g->box;
+    info.split = g->box.lo.x;
+    info.refs = g->nrefs;
+    if (!visit(&info, ctx) || max_depth == 0)
+        return BSP_OK;
+    info.depth = 1;
+    for (unsigned k = 0; k < 3; k++)
+        for (int i = 1; i < g->res[k]; i++) {
+            info.axis = k;
+            info.split = grid_plane(g, k, i);
+            (void)visit(&info, ctx);
+        }
     int c[3];
     for (c[2] = 0; c[2] < g->res[2]; c[2]++)
         for (c[1] = 0; c[1] < g->res[1]; c[1]++)
             for (c[0] = 0; c[0] < g->res[0]; c[0]++) {
                 uint64_t i = cell_index(g, c);
-                bsp_cell_info info;
                 memset(&info, 0, sizeof info);
                 info.box = cell_box(g, c);
+                info.depth = 1;
                 info.is_leaf = 1;
                 info.refs = g->start[i + 1] - g->start[i];
                 (void)visit(&info, ctx);
