@@ -253,3 +253,34 @@ TEST(grid_visit_reports_the_box_its_planes_and_its_cells)
     bsp_accel_destroy(a);
     bsp_scene_destroy(s);
 }
+
+TEST(grid_keeps_to_the_size_limit)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load("spd:balls", &s, &err) == BSP_OK);
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_GRID;
+    o.max_tree_bytes = (size_t)1 << 20;
+    bsp_accel *a = NULL;
+    /* too many cells for the limit */
+    o.grid_density = 1000.0;
+    CHECK(bsp_accel_build(s, &o, &a, &err) == BSP_ERR_LIMIT && a == NULL);
+    CHECK_STR_CONTAINS(err.message, "cells need");
+    /* cells that fit, references that do not: the ground polygon fills a
+     * layer of 1000 x 1000 cells */
+    const int res[3] = {1000, 1000, 1};
+    memcpy(o.grid_res, res, sizeof o.grid_res);
+    o.max_tree_bytes = (size_t)5 << 20;
+    CHECK(bsp_accel_build(s, &o, &a, &err) == BSP_ERR_LIMIT && a == NULL);
+    CHECK_STR_CONTAINS(err.message, "references");
+    /* and with room, the same grid builds */
+    o.max_tree_bytes = (size_t)64 << 20;
+    REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+    bsp_tree_stats st;
+    bsp_accel_tree_stats(a, &st);
+    CHECK(st.bytes > ((size_t)5 << 20) && st.bytes <= ((size_t)64 << 20));
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}

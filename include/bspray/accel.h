@@ -155,10 +155,11 @@ typedef struct bsp_build_options {
                         options, measures both on the rays of a 64 x 64 render of the view
                         and keeps the cheaper (bsp_accel_mixed_check); 0 keeps the
                         sah-mixed tree whatever it costs */
-    size_t max_tree_bytes; /* kd-trees: the most bytes the nodes and leaf references may
-                              take; a build that needs more fails with BSP_ERR_LIMIT
-                              (deep trees of overlapping primitives grow as 2^depth).
-                              0 (default): half the machine's physical memory */
+    size_t max_tree_bytes; /* kd-trees and grids: the most bytes the nodes (cells) and
+                              leaf references may take; a build that needs more fails
+                              with BSP_ERR_LIMIT (deep trees of overlapping primitives
+                              grow as 2^depth). 0 (default): half the machine's
+                              physical memory */
     double grid_density;   /* grid: about this many cells per primitive, cubic cells over
                               the scene's box (each axis at least 1 cell); 0: the default
                               (BSP_GRID_DEFAULT_DENSITY) */

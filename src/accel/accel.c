@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "accel/grid.h"
 #include "accel/kd_cost.h"
@@ -13,6 +14,16 @@
 
 static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {
     "naive", "kaplan", "sah", "sah-per", "sah-par", "sah-mixed", "grid"};
+
+size_t accel_max_bytes(const bsp_build_options *o)
+{
+    if (o->max_tree_bytes)
+        return o->max_tree_bytes;
+    long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGESIZE);
+    if (pages <= 0 || size <= 0)
+        return 0;
+    return (size_t)pages / 2 * (size_t)size;
+}
 
 double accel_now(void)
 {

@@ -72,6 +72,11 @@ HIDDEN int naive_scene_intersect(const bsp_scene *s, bsp_query *q, const bsp_ray
 HIDDEN int naive_scene_occluded(const bsp_scene *s, bsp_query *q, const bsp_ray *ray,
                                 uint32_t from);
 
+/* The most bytes a structure's nodes (cells) and lists may take under O:
+ * max_tree_bytes, or by default half the machine's physical memory; 0: no
+ * limit (the system does not say). */
+HIDDEN size_t accel_max_bytes(const bsp_build_options *o);
+
 /* Seconds on a monotonic clock. */
 HIDDEN double accel_now(void);
 

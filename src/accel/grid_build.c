@@ -166,13 +166,14 @@ static bsp_status resolution(grid *g, const bsp_build_options *o, size_t n, bsp_
 typedef struct pair_list {
     uint64_t *v; /* cell << 32 | primitive */
     size_t n, cap;
+    size_t most; /* the most pairs (references) the size limit leaves room for */
     uint32_t prim;
 } pair_list;
 
 static int add_pair(void *ctx, uint64_t cell)
 {
     pair_list *l = ctx;
-    if (l->n >= UINT32_MAX || !GROW_ARRAY(l->v, l->cap, l->n + 1))
+    if (l->n >= l->most || !GROW_ARRAY(l->v, l->cap, l->n + 1))
         return 0;
     l->v[l->n++] = cell << 32 | l->prim;
     return 1;
@@ -213,7 +214,20 @@ bsp_status grid_build(bsp_accel *a, bsp_error *err)
     for (unsigned k = 0; k < 3; k++)
         g->cell[k] = (g->box.hi.v[k] - g->box.lo.v[k]) / g->res[k];
 
-    pair_list l = {NULL, 0, 0, 0};
+    /* the cells' offsets and the lists within the size limit (--max-tree-mb) */
+    const size_t limit = accel_max_bytes(&a->opts);
+    const uint64_t cell_bytes = (g->ncells + 1) * sizeof(uint32_t);
+    if (limit && cell_bytes > limit) {
+        const unsigned long long cells = (unsigned long long)g->ncells;
+        grid_free(g);
+        return error_set(err, BSP_ERR_LIMIT, NULL, 0,
+                         "grid: %llu cells need %.0f MiB, more than the limit of %.0f MiB", cells,
+                         (double)cell_bytes / (1 << 20), (double)limit / (1 << 20));
+    }
+    size_t most = UINT32_MAX - 1;
+    if (limit && (limit - cell_bytes) / sizeof(uint32_t) < most)
+        most = (limit - cell_bytes) / sizeof(uint32_t);
+    pair_list l = {NULL, 0, 0, most, 0};
     kd_clip_scratch scr;
     memset(&scr, 0, sizeof scr);
     int ok = 1;
@@ -229,10 +243,11 @@ bsp_status grid_build(bsp_accel *a, bsp_error *err)
     if (!g->start || !g->prims) {
         free(l.v);
         grid_free(g);
-        return l.n >= UINT32_MAX
-                   ? error_set(err, BSP_ERR_LIMIT, NULL, 0,
-                               "grid: more than %u primitive references", UINT32_MAX - 1)
-                   : error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
+        return l.n >= most ? error_set(err, BSP_ERR_LIMIT, NULL, 0,
+                                       "grid: more than %zu primitive references (the size "
+                                       "limit, --max-tree-mb, or 2^32)",
+                                       most)
+                           : error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
     }
     /* counted into the cells' lists, keeping the pairs' (primitive) order */
     for (size_t i = 0; i < l.n; i++)

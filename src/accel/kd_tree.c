@@ -5,7 +5,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "accel/kd_clip.h"
 #include "accel/kd_cost.h"
@@ -488,15 +487,6 @@ static void kd_destroy(void *impl)
 
 static const accel_ops kd_ops = {kd_intersect, kd_occluded, kd_destroy};
 
-/* The default tree size limit; 0 (none) when the system does not say. */
-static size_t half_physical_memory(void)
-{
-    long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGESIZE);
-    if (pages <= 0 || size <= 0)
-        return 0;
-    return (size_t)pages / 2 * (size_t)size;
-}
-
 bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
 {
     bsp_build_options *o = &a->opts;
@@ -521,7 +511,7 @@ bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
         free(t);
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
     }
-    t->max_bytes = o->max_tree_bytes ? o->max_tree_bytes : half_physical_memory();
+    t->max_bytes = accel_max_bytes(o);
     bsp_status st;
     switch (o->kind) {
     case BSP_ACCEL_KAPLAN:
