@@ -65,6 +65,13 @@ static inline int grid_cell_of(const grid *g, unsigned axis, double x)
     return i;
 }
 
+/* The index of cell C (x, y, z) in the lists' order. */
+static inline uint64_t grid_cell_index(const grid *g, const int c[3])
+{
+    return ((uint64_t)c[2] * (uint64_t)g->res[1] + (uint64_t)c[1]) * (uint64_t)g->res[0] +
+           (uint64_t)c[0];
+}
+
 /* Builds A's grid over A->scene with A->opts (grid_density, grid_res). */
 HIDDEN bsp_status grid_build(bsp_accel *a, bsp_error *err);
 /* The grid's figures in Havran's names (a cell is a leaf, N_IN = 0). */

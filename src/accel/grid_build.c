@@ -63,13 +63,7 @@ static void cell_range(const grid *g, const bsp_box *pb, int lo[3], int hi[3])
     }
 }
 
-static uint64_t cell_index(const grid *g, const int c[3])
-{
-    return ((uint64_t)c[2] * (uint64_t)g->res[1] + (uint64_t)c[1]) * (uint64_t)g->res[0] +
-           (uint64_t)c[0];
-}
-
-/* Whether primitive P (live, bounds B) belongs in the cell C, whose box is
+/* Whether primitive P (live, bounds B) belongs in the cell whose box is
  * CB, under the padding PAD_USED (the build's, or the checker's fraction of
  * it): its part in CB grown by PAD_USED, padded, overlaps CB. SINGLE: the
  * padded bounds overlap no other cell, so no clipping is needed. -1 when
@@ -108,7 +102,7 @@ static int for_each_cell(const grid *g, const bsp_scene *scene, uint32_t p, bsp_
             for (c[0] = lo[0]; c[0] <= hi[0]; c[0]++) {
                 bsp_box cb = cell_box(g, c);
                 int r = belongs(scene, p, b, g->pad, &cb, single, scr);
-                if (r < 0 || (r > 0 && !add(ctx, cell_index(g, c))))
+                if (r < 0 || (r > 0 && !add(ctx, grid_cell_index(g, c))))
                     return 0;
             }
     return 1;
@@ -346,7 +340,7 @@ bsp_status grid_check(const grid *g, const bsp_scene *scene, bsp_error *err)
         for (c[2] = lo[2]; c[2] <= hi[2] && st == BSP_OK; c[2]++)
             for (c[1] = lo[1]; c[1] <= hi[1] && st == BSP_OK; c[1]++)
                 for (c[0] = lo[0]; c[0] <= hi[0] && st == BSP_OK; c[0]++) {
-                    const uint64_t i = cell_index(g, c);
+                    const uint64_t i = grid_cell_index(g, c);
                     if (listed(g, i, p))
                         continue;
                     bsp_box cb = cell_box(g, c);
@@ -389,7 +383,7 @@ bsp_status grid_visit(const grid *g, int max_depth,
     for (c[2] = 0; c[2] < g->res[2]; c[2]++)
         for (c[1] = 0; c[1] < g->res[1]; c[1]++)
             for (c[0] = 0; c[0] < g->res[0]; c[0]++) {
-                uint64_t i = cell_index(g, c);
+                uint64_t i = grid_cell_index(g, c);
                 memset(&info, 0, sizeof info);
                 info.box = cell_box(g, c);
                 info.depth = 1;

@@ -50,9 +50,9 @@ static int dda_start(const grid *g, const bsp_ray *ray, const double o[3], const
     for (unsigned k = 0; k < 3; k++) {
         w->c[k] = grid_cell_of(g, k, o[k] + d[k] * t0);
         w->step[k] = d[k] > 0.0 ? 1 : d[k] < 0.0 ? -1 : 0;
+        /* (a subnormal d may make a crossing infinite: such an axis is
+         * stepped at most once, and the ray hardly moves along it) */
         w->tnext[k] = w->step[k] ? exit_t(g, o, d, w, k) : INFINITY;
-        if (!(w->tnext[k] == w->tnext[k]))
-            w->tnext[k] = INFINITY; /* a subnormal d: no movement worth a step */
     }
     return 1;
 }
@@ -76,12 +76,6 @@ static inline int dda_step(const grid *g, const double o[3], const double d[3], 
         return 0;
     w->tnext[k] = exit_t(g, o, d, w, k);
     return 1;
-}
-
-static inline uint64_t cell_of_walk(const grid *g, const dda *w)
-{
-    return ((uint64_t)w->c[2] * (uint64_t)g->res[1] + (uint64_t)w->c[1]) * (uint64_t)g->res[0] +
-           (uint64_t)w->c[0];
 }
 
 /* A query's start on grid G of scene S: the ray's origin O and direction
@@ -127,7 +121,7 @@ int grid_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_
     uint32_t best_p = BSP_NO_PRIM;
     uint64_t cells = 0, nonempty = 0, refs = 0, tests = 0;
     for (;;) {
-        const uint64_t c = cell_of_walk(g, &w);
+        const uint64_t c = grid_cell_index(g, w.c);
         const uint32_t *list = g->prims + g->start[c], *end = g->prims + g->start[c + 1];
         cells++;
         nonempty += list != end;
@@ -176,7 +170,7 @@ int grid_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t
     int found = 0;
     uint64_t cells = 0, nonempty = 0, refs = 0, tests = 0;
     do {
-        const uint64_t c = cell_of_walk(g, &w);
+        const uint64_t c = grid_cell_index(g, w.c);
         const uint32_t *list = g->prims + g->start[c], *end = g->prims + g->start[c + 1];
         cells++;
         nonempty += list != end;
