@@ -6,11 +6,13 @@
  * with his assignment (a primitive in every cell its bounds overlap): the
  * cells (N_V) exactly, the empty cells and the references to rounding, and
  * on balls the per-ray figures of a 513 x 513 depth-4 render without
- * mailboxes.
+ * mailboxes; and `bspray bench --grids`, which prints that comparison.
  */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <stdlib.h>
+#include <unistd.h>
 
 #include "bspray/bspray.h"
 #include "harness.h"
@@ -283,4 +285,41 @@ TEST(grid_keeps_to_the_size_limit)
     CHECK(st.bytes > ((size_t)5 << 20) && st.bytes <= ((size_t)64 << 20));
     bsp_accel_destroy(a);
     bsp_scene_destroy(s);
+}
+
+TEST(cli_bench_grids_reproduces_havrans_tetra)
+{
+    char dir[] = "/tmp/bspray-grids-XXXXXX";
+    REQUIRE(mkdtemp(dir));
+    char csv[256], cmd[768];
+    snprintf(csv, sizeof csv, "%s/g.csv", dir);
+    snprintf(cmd, sizeof cmd, "%s bench --grids spd:tetra --quiet --threads 2 --csv %s 2>&1",
+             harness_cli(), csv);
+    /* his 35^3 grid: every cell and reference as his */
+    CHECK_RUN(cmd, 0, "| tetra | 35 x 35 x 35 | 37311 / 37311 | 35936 / 35936 |");
+    FILE *f = fopen(csv, "r");
+    REQUIRE(f);
+    char line[512];
+    int rows = 0, near = 0;
+    while (fgets(line, sizeof line, f)) {
+        /* scene,res_x,res_y,res_z,N_V,...: N_TS is the 12th field, his the 13th */
+        char *fields[20];
+        int n = 0;
+        for (char *p = strtok(line, ","); p && n < 20; p = strtok(NULL, ","))
+            fields[n++] = p;
+        if (n < 17 || strcmp(fields[0], "tetra") != 0)
+            continue;
+        int rx = atoi(fields[1]), ry = atoi(fields[2]), rz = atoi(fields[3]);
+        unsigned long long nv = strtoull(fields[4], NULL, 10);
+        double ts = atof(fields[11]), ts_h = atof(fields[12]);
+        rows++;
+        CHECK(nv == (unsigned long long)rx * (unsigned long long)ry * (unsigned long long)rz);
+        near += fabs(ts / ts_h - 1.0) < 0.01; /* the walk: his N_TS within 1 % */
+    }
+    fclose(f);
+    CHECK(rows == 3 && near == 3);
+    snprintf(cmd, sizeof cmd, "%s bench --grids spd:shells 2>&1", harness_cli());
+    CHECK_RUN(cmd, 2, "not one of Havran's grid scenes");
+    remove(csv);
+    rmdir(dir);
 }

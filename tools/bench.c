@@ -37,7 +37,8 @@ static const char bench_usage[] =
     "                        [--mailbox on|off] [--validate N] [--repeat N] [--csv FILE]\n"
     "                        [--plot FILE.png] [--quiet]\n"
     "       bspray bench --paper [SCENE...] [--accel LIST] [--csv FILE] ...  (see --paper --help)\n"
-    "       bspray bench --scaling [SCENE...] [--accel LIST] [--repeat N] ...  (see --scaling --help)";
+    "       bspray bench --scaling [SCENE...] [--accel LIST] [--repeat N] ...  (see --scaling --help)\n"
+    "       bspray bench --grids [SCENE...] [--csv FILE] ...  (see --grids --help)";
 
 /* The default scene list of bench and bench --paper: every SPD database at
  * its default size, teapot at the size of the SPD Readme and Havran's
@@ -572,6 +573,8 @@ int cmd_bench(int argc, char **argv)
             return bench_paper(argc, argv);
         else if (!strcmp(argv[i], "--scaling"))
             return bench_scaling(argc, argv);
+        else if (!strcmp(argv[i], "--grids"))
+            return bench_grids(argc, argv);
     args a = {argc, 1, argv, bench_usage, NULL};
     bench_opts o;
     memset(&o, 0, sizeof o);

@@ -63,4 +63,8 @@ extern const char *const bench_scaling_default_scenes[];
  * (bench_scaling.c). */
 int bench_scaling(int argc, char **argv);
 
+/* `bspray bench --grids ...`: Havran's uniform grids reproduced
+ * (bench_grids.c). */
+int bench_grids(int argc, char **argv);
+
 #endif /* BSPRAY_TOOLS_BENCH_H */
