@@ -518,6 +518,29 @@ static void parse_grid_res(args *a, const char *opt, int res[3])
     }
 }
 
+#define GRID_ARGS_HELP                                                                             \
+    "  --grid-density D   grid: about D cells per primitive, cubic cells over the scene's\n"      \
+    "                     box, 0 < D <= 1e6 (default 4; Havran's tables use 1 and 10)\n"         \
+    "  --grid-res X,Y,Z   grid: exactly these cells per axis (overrides --grid-density)\n"       \
+    "  --grid-assign clipped|bounds  grid: a primitive goes in the cells its part reaches\n"    \
+    "                     (clipped, default) or in every cell its bounds overlap (bounds:\n"     \
+    "                     Havran's 1999 grids; see docs/grid.md)\n"
+
+int parse_grid_arg(args *a, bsp_build_options *opts)
+{
+    const char *s = a->argv[a->i];
+    if (!strcmp(s, "--grid-density"))
+        opts->grid_density =
+            parse_real(a, s, opt_value(a, s), in_density_range, "a number in (0, 1e6]");
+    else if (!strcmp(s, "--grid-assign"))
+        opts->grid_assign_bounds = parse_one_of_two(a, s, "clipped", "bounds");
+    else if (!strcmp(s, "--grid-res"))
+        parse_grid_res(a, s, opts->grid_res);
+    else
+        return 0;
+    return 1;
+}
+
 const char build_args_help[] =
     "  --accel METHOD     acceleration method: sah (default), sah-per, sah-par, sah-mixed,\n"
     "                     kaplan, grid (a uniform grid), naive (sah-per/-par/-mixed build\n"
@@ -540,12 +563,7 @@ const char build_args_help[] =
     "                     the same for any N\n"
     "  --max-tree-mb N    kd-tree, grid: fail when the nodes (cells) and lists need more\n"
     "                     than N MiB (default: half the machine's memory)\n"
-    "  --grid-density D   grid: about D cells per primitive, cubic cells over the scene's\n"
-    "                     box, 0 < D <= 1e6 (default 4; Havran's tables use 1 and 10)\n"
-    "  --grid-res X,Y,Z   grid: exactly these cells per axis (overrides --grid-density)\n"
-    "  --grid-assign clipped|bounds  grid: a primitive goes in the cells its part reaches\n"
-    "                     (clipped, default) or in every cell its bounds overlap (bounds:\n"
-    "                     Havran's 1999 grids; see docs/grid.md)\n" COST_ARGS_HELP;
+    GRID_ARGS_HELP COST_ARGS_HELP;
 
 int parse_build_arg(args *a, bsp_build_options *opts)
 {
@@ -576,13 +594,8 @@ int parse_build_arg(args *a, bsp_build_options *opts)
                        opts->sah_budget_cut, opts->sah_straddle_twice};
         parse_cost_arg(a, &c);
         apply_cost_args(&c, opts);
-    } else if (!strcmp(s, "--grid-density")) {
-        opts->grid_density =
-            parse_real(a, s, opt_value(a, s), in_density_range, "a number in (0, 1e6]");
-    } else if (!strcmp(s, "--grid-assign")) {
-        opts->grid_assign_bounds = parse_one_of_two(a, s, "clipped", "bounds");
-    } else if (!strcmp(s, "--grid-res")) {
-        parse_grid_res(a, s, opts->grid_res);
+    } else if (parse_grid_arg(a, opts)) {
+        ;
     } else if (!strcmp(s, "--mixed-share")) {
         opts->mixed_primary_share =
             parse_real(a, s, opt_value(a, s), in_share_range, "a number in (0, 1]");

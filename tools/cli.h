@@ -137,6 +137,10 @@ void json_real(FILE *f, double x);
  * the leaf budget's cut, and the digest, a string of 16 hex digits (a 64-bit
  * value is not exact as a JSON number), null for the naive method. */
 void tree_stats_json(FILE *f, const char *indent, const bsp_tree_stats *t, bsp_accel_kind kind);
+/* The grid's build options (--grid-density, --grid-res, --grid-assign) at
+ * a->argv[a->i] into OPTS: 1 when it was one (its value consumed), else 0. */
+int parse_grid_arg(args *a, bsp_build_options *opts);
+
 /* Whether a build of method K uses bsp_build_options.threads (the sah
  * family): the benchmarks then time it on all threads too. */
 int kind_builds_in_parallel(bsp_accel_kind k);

@@ -48,7 +48,7 @@ static const char viz_help[] =
     "  -o FILE          output image, (2 x SIZE) by (methods x SIZE) pixels; .ppm writes\n"
     "                   binary PPM, anything else PNG (required)\n"
     "  --accel LIST     comma-separated methods, one row each: kaplan, sah, sah-per,\n"
-    "                   sah-par, sah-mixed (default sah), or grid (its default density)\n"
+    "                   sah-par, sah-mixed (default sah), or grid (see --grid-*)\n"
     "  --max-depth N    the trees' maximum depth (default 10, the paper's setting for\n"
     "                   its pictures); also the end of the depth colour scale\n"
     "  --leaf-size N    a node with at most N primitives becomes a leaf (default: the\n"
@@ -64,6 +64,8 @@ static const char viz_help[] =
     "  --quiet          print nothing but errors\n"
     "  --costs LIST, --empty-bonus F, --min-saving X, --leaf-budget X, --leaf-budget-min N,\n"
     "                 --budget-cut F|off  the SAH model (see\n"
+    "                 'bspray render --help')\n"
+    "  --grid-density D, --grid-res X,Y,Z, --grid-assign clipped|bounds  the grid (see\n"
     "                 'bspray render --help')\n"
     "  --eye, --at, --dir, --up X,Y,Z   override the camera; --fov DEG its field of view.\n"
     "                   The sah-per, sah-par and sah-mixed trees are built for this view.\n"
@@ -144,6 +146,8 @@ int cmd_viz(int argc, char **argv)
     draw_color_mode mode = DRAW_COLOR_DEPTH;
     view_args view = {0};
     cost_args costs = {{0}, 0.0, 0.0, 0.0, 0, 0.0, 0};
+    bsp_build_options grid_opts; /* --grid-*: for the rows of method grid */
+    bsp_build_options_defaults(&grid_opts);
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {
@@ -177,7 +181,8 @@ int cmd_viz(int argc, char **argv)
             threads = parse_int(&a, s, 1, 256);
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             quiet = 1;
-        } else if (parse_view_arg(&a, &view) || parse_cost_arg(&a, &costs)) {
+        } else if (parse_view_arg(&a, &view) || parse_cost_arg(&a, &costs) ||
+                   parse_grid_arg(&a, &grid_opts)) {
             continue;
         } else {
             take_operand(&a, &scene_path);
@@ -228,6 +233,9 @@ int cmd_viz(int argc, char **argv)
         bopts.max_depth = max_depth;
         bopts.max_leaf_prims = leaf_size;
         apply_cost_args(&costs, &bopts);
+        bopts.grid_density = grid_opts.grid_density;
+        memcpy(bopts.grid_res, grid_opts.grid_res, sizeof bopts.grid_res);
+        bopts.grid_assign_bounds = grid_opts.grid_assign_bounds;
         rows[r].accel = build_accel(scene, &bopts);
         if (draw_cells_collect(rows[r].accel, &rows[r].cells, &err) != BSP_OK) {
             fprintf(stderr, "%s: %s\n", prog, err.message);
