@@ -323,3 +323,21 @@ TEST(cli_bench_grids_reproduces_havrans_tetra)
     remove(csv);
     rmdir(dir);
 }
+
+TEST(cli_viz_draws_a_grid_of_the_cells_asked_for)
+{
+    char dir[] = "/tmp/bspray-gridviz-XXXXXX";
+    REQUIRE(mkdtemp(dir));
+    char png[256], cmd[768];
+    snprintf(png, sizeof png, "%s/g.png", dir);
+    snprintf(cmd, sizeof cmd,
+             "%s viz spd:tetra --accel grid --grid-res 8,8,8 --size 64 -o %s 2>&1",
+             harness_cli(), png);
+    CHECK_RUN(cmd, 0, "grid        512 leaves");
+    FILE *f = fopen(png, "rb");
+    CHECK(f != NULL);
+    if (f)
+        fclose(f);
+    remove(png);
+    rmdir(dir);
+}
