@@ -6,7 +6,8 @@
  * with his assignment (a primitive in every cell its bounds overlap): the
  * cells (N_V) exactly, the empty cells and the references to rounding, and
  * on balls the per-ray figures of a 513 x 513 depth-4 render without
- * mailboxes; and `bspray bench --grids`, which prints that comparison.
+ * mailboxes (his figures are written here, so the tests run without
+ * ../shared); and `bspray bench --grids`, which prints that comparison.
  */
 #include <math.h>
 #include <stdio.h>
@@ -137,16 +138,16 @@ static const havran_grid havran[] = {
     {"tetra", {35, 35, 35}, 42875, 37311, 35936},
 };
 
-static bsp_scene *shared_spd(const char *name)
+/* The SPD database NAME generated in code: bit for bit the file of the SPD
+ * programs that Havran measured (test_spd.c checks that), so these tests
+ * need no ../shared. */
+static bsp_scene *spd_scene(const char *name)
 {
-    const char *shared = harness_shared_dir();
-    if (!shared)
-        harness_skip("../shared is absent: Havran's grid figures not compared");
-    char path[1024];
-    snprintf(path, sizeof path, "%s/scenes/spd/%s.nff", shared, name);
+    char spec[64];
+    snprintf(spec, sizeof spec, "spd:%s", name);
     bsp_scene *s = NULL;
     bsp_error err;
-    REQUIRE_MSG(bsp_scene_load(path, &s, &err) == BSP_OK, "%s", err.message);
+    REQUIRE_MSG(bsp_scene_load(spec, &s, &err) == BSP_OK, "%s", err.message);
     return s;
 }
 
@@ -154,7 +155,7 @@ TEST(grid_cells_match_havrans_at_his_resolutions)
 {
     for (size_t i = 0; i < sizeof havran / sizeof *havran; i++) {
         const havran_grid *h = &havran[i];
-        bsp_scene *s = shared_spd(h->scene);
+        bsp_scene *s = spd_scene(h->scene);
         bsp_accel *a = grid_of(s, 0.0, h->res, 0, 1);
         bsp_tree_stats st;
         bsp_accel_tree_stats(a, &st);
@@ -185,7 +186,7 @@ TEST(grid_rays_match_havrans_on_balls)
 {
     /* his (46, 46, 3) grid on balls, no mailboxes: N_IT 358.66, N_TS =
      * N_ETS 5.69, N_EETS 3.00 per ray of the whole render */
-    bsp_scene *s = shared_spd("balls");
+    bsp_scene *s = spd_scene("balls");
     const int res[3] = {46, 46, 3};
     bsp_accel *a = grid_of(s, 0.0, res, 0, 1);
     bsp_render_options o;
