@@ -870,3 +870,42 @@ TEST(cli_bench_checks_every_scene_first)
             free(out);
         }
 }
+
+/* The four bench modes read their shared options through one reader
+ * (tools/bench_cmdline.c): each refuses an option no mode takes, an option
+ * that belongs to another mode, and a --csv it cannot write (before any
+ * work, naming the file), and each accepts its own mode word. */
+TEST(cli_bench_modes_share_their_options)
+{
+    static const struct {
+        const char *mode;    /* "" for the plain bench */
+        const char *foreign; /* an option of another mode */
+        const char *scene;
+    } modes[] = {
+        {"", "--mixed-check", "spd:balls:1"},
+        {"--paper", "--grid-res", "spd:balls:1"},
+        {"--scaling", "--res", "spd:balls:1"},
+        {"--grids", "--plot", "tetra"},
+    };
+    char cmd[1024];
+    for (size_t i = 0; i < sizeof modes / sizeof modes[0]; i++) {
+        const char *m = modes[i].mode, *sc = modes[i].scene;
+        snprintf(cmd, sizeof cmd, "%s bench %s %s --frobnicate 2>&1", harness_cli(), m, sc);
+        CHECK_RUN(cmd, 2, "unknown option '--frobnicate'");
+        snprintf(cmd, sizeof cmd, "%s bench %s %s %s 1 2>&1", harness_cli(), m, sc,
+                 modes[i].foreign);
+        CHECK_RUN(cmd, 2, "unknown option");
+        snprintf(cmd, sizeof cmd, "%s bench %s %s --threads 0 2>&1", harness_cli(), m, sc);
+        CHECK_RUN(cmd, 2, "--threads");
+        snprintf(cmd, sizeof cmd, "%s bench %s %s --quiet --csv %s/no/such/dir/b.csv 2>&1",
+                 harness_cli(), m, sc, harness_tmpdir());
+        CHECK_RUN(cmd, 1, "b.csv: cannot open for writing");
+        snprintf(cmd, sizeof cmd, "%s bench %s --help 2>&1", harness_cli(), m);
+        CHECK_RUN(cmd, 0, "usage: bspray bench");
+    }
+    /* --paper's least resolution is 2 (its per-pixel figures), bench's 1 */
+    snprintf(cmd, sizeof cmd, "%s bench --paper spd:balls:1 --res 1 2>&1", harness_cli());
+    CHECK_RUN(cmd, 2, "from 2 to 65536");
+    snprintf(cmd, sizeof cmd, "%s bench spd:balls:1 --res 0 2>&1", harness_cli());
+    CHECK_RUN(cmd, 2, "from 1 to 65536");
+}

@@ -49,29 +49,6 @@ const char *const bench_default_scenes[] = {
     "spd:mount",   "spd:teapot:12", "spd:tetra", "spd:shells", "spd:jacks",
     "spd:sombrero", "spd:sample", "spd:nurbtst", NULL};
 
-const char **bench_scene_array(int argc, const char *const *defaults)
-{
-    size_t n = 0;
-    while (defaults[n])
-        n++;
-    const char **a = calloc((size_t)argc + n + 1, sizeof(const char *));
-    if (!a) {
-        fprintf(stderr, "%s: out of memory\n", prog);
-        exit(EXIT_INPUT);
-    }
-    return a;
-}
-
-int bench_scenes_or_defaults(const char **scenes, int n, const char *const *defaults)
-{
-    if (n == 0)
-        while (defaults[n]) {
-            scenes[n] = defaults[n];
-            n++;
-        }
-    return n;
-}
-
 /* naive is benchmarked by default only up to this many primitives */
 #define NAIVE_DEFAULT_MAX_PRIMS 2000
 
@@ -277,11 +254,9 @@ long bench_validate(const bsp_accel *accel, const bsp_accel *naive, const bsp_sc
 /* --- the benchmark ---------------------------------------------------------------- */
 
 typedef struct bench_opts {
-    int res, depth, threads, mailbox, nvalidate, quiet;
-    int repeat; /* timed renders per figure; T_TR is the best */
+    bench_cmdline cl; /* repeat: timed renders per figure; T_TR is the best */
     bsp_accel_kind kinds[BSP_ACCEL_KIND_COUNT];
     int nkinds, kinds_given;
-    cost_args costs; /* --costs, --empty-bonus, --min-saving, --leaf-budget */
     FILE *csv;
 } bench_opts;
 
@@ -367,17 +342,17 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     bsp_build_options bo;
     bsp_build_options_defaults(&bo);
     bo.kind = kind;
-    bo.mailbox = o->mailbox;
-    apply_cost_args(&o->costs, &bo);
-    if (!o->quiet)
+    bo.mailbox = o->cl.mailbox;
+    apply_cost_args(&o->cl.costs, &bo);
+    if (!o->cl.quiet)
         fprintf(stderr, "%s: %s: %s: building\n", prog, scene_name, row.method);
     bo.threads = 1; /* T_B is the single-threaded build */
     bsp_accel *accel = build_accel(scene, &bo);
     row.t_build = bsp_accel_build_seconds(accel);
     row.t_build_n = row.t_build;
     bsp_accel_tree_stats(accel, &row.tree);
-    if (o->threads > 1 && kind_builds_in_parallel(kind)) {
-        bo.threads = o->threads; /* the same tree, on all threads: checked by its digest */
+    if (o->cl.threads > 1 && kind_builds_in_parallel(kind)) {
+        bo.threads = o->cl.threads; /* the same tree, on all threads: checked by its digest */
         bsp_accel *again = build_accel(scene, &bo);
         row.t_build_n = bsp_accel_build_seconds(again);
         bsp_tree_stats ts;
@@ -387,7 +362,7 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
             fprintf(stderr,
                     "%s: %s: %s built another tree on %d threads than on one (digests "
                     "%016" PRIx64 ", %016" PRIx64 "); aborting\n",
-                    prog, scene_name, row.method, o->threads, ts.digest, row.tree.digest);
+                    prog, scene_name, row.method, o->cl.threads, ts.digest, row.tree.digest);
             bsp_accel_destroy(accel);
             return 1;
         }
@@ -396,7 +371,7 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
 
     if (kind != BSP_ACCEL_NAIVE) {
         char what[256];
-        row.validated = bench_validate(accel, naive, scene, o->nvalidate, what, sizeof what);
+        row.validated = bench_validate(accel, naive, scene, o->cl.nvalidate, what, sizeof what);
         if (row.validated < 0) {
             fprintf(stderr, "%s: %s: %s differs from the naive method on %s; aborting\n", prog,
                     scene_name, row.method, what);
@@ -409,15 +384,15 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     memset(sets, 0, sizeof sets);
     bsp_render_options ro;
     bsp_render_options_defaults(&ro);
-    ro.width = ro.height = o->res;
-    ro.max_depth = o->depth;
+    ro.width = ro.height = o->cl.res;
+    ro.max_depth = o->cl.depth;
     ro.threads = 1;
     ro.ray_log = bench_log_ray;
     ro.ray_log_ctx = sets;
     bsp_image *img = NULL;
     bsp_render_stats st;
     bsp_error err;
-    if (!o->quiet)
+    if (!o->cl.quiet)
         fprintf(stderr, "%s: %s: %s: rendering\n", prog, scene_name, row.method);
     if (bsp_render(accel, &ro, &img, &st, &err) != BSP_OK) {
         fprintf(stderr, "%s: %s: %s\n", prog, scene_name, err.message);
@@ -445,14 +420,14 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
      * CPU time, time descheduled not being its own */
     ro.ray_log = NULL;
     row.t_tr1 = row.t_trn = INFINITY;
-    for (int rep = 0; rep < o->repeat; rep++) {
+    for (int rep = 0; rep < o->cl.repeat; rep++) {
         ro.threads = 1;
         double c0 = bench_cpu_seconds();
         bsp_status rs = bsp_render(accel, &ro, &img, NULL, &err);
         double dt = bench_cpu_seconds() - c0;
         if (rs == BSP_OK) {
             bsp_image_destroy(img);
-            ro.threads = o->threads;
+            ro.threads = o->cl.threads;
             rs = bsp_render(accel, &ro, &img, &st, &err);
         }
         if (rs != BSP_OK) {
@@ -481,7 +456,7 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
          * a shared machine disturbs single passes */
         for (int rep = 0; rep < SHOOT_REPEATS; rep++) {
             double r1 = shoot_rate(accel, &sets[c], any, 1, hits, occ);
-            double rn = shoot_rate(accel, &sets[c], any, o->threads, hits, occ);
+            double rn = shoot_rate(accel, &sets[c], any, o->cl.threads, hits, occ);
             row.rate1[c] = r1 > row.rate1[c] ? r1 : row.rate1[c];
             row.raten[c] = rn > row.raten[c] ? rn : row.raten[c];
         }
@@ -491,7 +466,7 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     bench_free_ray_sets(sets);
     print_row(&row);
     if (o->csv)
-        csv_row(o->csv, &row, o->threads);
+        csv_row(o->csv, &row, o->cl.threads);
     bsp_accel_destroy(accel);
     *out = row;
     return 0;
@@ -555,8 +530,8 @@ static int write_plot(const char *path, const bench_row *rows, int nrows, const 
                     t[k * ns + c] = rows[i].t_tr1;
         }
         char title[160];
-        snprintf(title, sizeof title, "RENDER TIME, ONE THREAD (%d X %d, DEPTH %d)", o->res,
-                 o->res, o->depth);
+        snprintf(title, sizeof title, "RENDER TIME, ONE THREAD (%d X %d, DEPTH %d)", o->cl.res,
+                 o->cl.res, o->cl.depth);
         rc = bench_write_bars(path, title, "SECONDS, LOG SCALE (LOWER IS FASTER)", scenes, ns,
                               names, nk, t);
     }
@@ -564,6 +539,17 @@ static int write_plot(const char *path, const bench_row *rows, int nrows, const 
     free(names);
     free(t);
     return rc;
+}
+
+/* bench's own option: --accel. */
+static int bench_option(args *a, const char *s, void *ctx)
+{
+    bench_opts *o = ctx;
+    if (strcmp(s, "--accel"))
+        return 0;
+    o->nkinds = parse_accel_list(a, opt_value(a, s), o->kinds, BSP_ACCEL_KIND_COUNT);
+    o->kinds_given = 1;
+    return 1;
 }
 
 int cmd_bench(int argc, char **argv)
@@ -578,78 +564,32 @@ int cmd_bench(int argc, char **argv)
     args a = {argc, 1, argv, bench_usage, NULL};
     bench_opts o;
     memset(&o, 0, sizeof o);
-    o.res = 513;
-    o.depth = 4;
-    o.mailbox = 1;
-    o.nvalidate = 20000;
-    o.repeat = 3;
-    o.threads = default_threads();
+    bench_cmdline_init(&o.cl,
+                       BENCH_TAKES_RENDER | BENCH_TAKES_REPEAT | BENCH_TAKES_COSTS |
+                           BENCH_TAKES_PLOT,
+                       NULL, bench_default_scenes);
+    o.cl.nvalidate = 20000;
     /* the default methods: naive, kaplan, sah (the view rules: --accel, or --paper) */
     for (int k = BSP_ACCEL_NAIVE; k <= BSP_ACCEL_SAH; k++)
         o.kinds[o.nkinds++] = (bsp_accel_kind)k;
-    const char *csv_path = NULL, *plot_path = NULL;
-    const char **scenes = bench_scene_array(argc, bench_default_scenes);
-    int nscenes = 0;
-    for (; a.i < argc; a.i++) {
-        const char *s = argv[a.i];
-        if (is_help(s)) {
-            print_help();
-            free(scenes);
-            return 0;
-        } else if (!strcmp(s, "--accel")) {
-            o.nkinds = parse_accel_list(&a, opt_value(&a, s), o.kinds, BSP_ACCEL_KIND_COUNT);
-            o.kinds_given = 1;
-        } else if (!strcmp(s, "--res")) {
-            o.res = parse_int(&a, s, 1, 65536);
-        } else if (!strcmp(s, "--depth")) {
-            o.depth = parse_int(&a, s, 0, 64);
-        } else if (!strcmp(s, "--threads")) {
-            o.threads = parse_int(&a, s, 1, 256);
-        } else if (!strcmp(s, "--mailbox")) {
-            o.mailbox = parse_on_off(&a, s);
-        } else if (!strcmp(s, "--validate")) {
-            o.nvalidate = parse_int(&a, s, 0, 100000000);
-        } else if (!strcmp(s, "--repeat")) {
-            o.repeat = parse_int(&a, s, 1, 100);
-        } else if (!strcmp(s, "--csv")) {
-            csv_path = opt_value(&a, s);
-        } else if (!strcmp(s, "--plot")) {
-            plot_path = opt_value(&a, s);
-        } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
-            o.quiet = 1;
-        } else if (parse_cost_arg(&a, &o.costs)) {
-            continue;
-        } else if (s[0] == '-' && s[1]) {
-            die_usage(a.usage, "unknown option '%s'", s);
-        } else {
-            scenes[nscenes++] = s;
-        }
-    }
-    nscenes = bench_scenes_or_defaults(scenes, nscenes, bench_default_scenes);
+    if (bench_read_cmdline(&a, &o.cl, bench_option, &o, print_help))
+        return 0;
+    if (!bench_cmdline_ready(&o.cl, 1, &o.csv))
+        return EXIT_INPUT;
+    const char **scenes = o.cl.scenes;
+    int nscenes = o.cl.nscenes;
+    const char *csv_path = o.cl.csv_path, *plot_path = o.cl.plot_path;
     bench_row *rows = calloc((size_t)nscenes * (size_t)o.nkinds + 1, sizeof *rows);
     if (!rows) {
         fprintf(stderr, "%s: out of memory\n", prog);
-        free(scenes);
+        if (o.csv)
+            fclose(o.csv);
+        bench_free_cmdline(&o.cl);
         return EXIT_INPUT;
     }
-    if ((plot_path && !output_path_writable(plot_path)) || /* before minutes of renders */
-        !scenes_loadable(scenes, nscenes)) {
-        free(rows);
-        free(scenes);
-        return EXIT_INPUT;
-    }
-    if (csv_path) {
-        o.csv = fopen(csv_path, "w");
-        if (!o.csv) {
-            fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, csv_path,
-                    strerror(errno));
-            free(rows);
-            free(scenes);
-            return EXIT_INPUT;
-        }
+    if (o.csv)
         csv_header(o.csv);
-    }
-    print_header(o.threads);
+    print_header(o.cl.threads);
     int rc = 0, nrows = 0;
     for (int i = 0; i < nscenes && rc == 0; i++) {
         bsp_scene *scene = load_scene(scenes[i]);
@@ -679,6 +619,6 @@ int cmd_bench(int argc, char **argv)
     if (rc == 0 && plot_path && !write_plot(plot_path, rows, nrows, &o))
         rc = EXIT_INPUT;
     free(rows);
-    free(scenes);
+    bench_free_cmdline(&o.cl);
     return rc ? EXIT_INPUT : 0;
 }

@@ -1,6 +1,6 @@
 /*
  * bench.h — what `bspray bench` and its --paper (paper.c) and --scaling
- * (bench_scaling.c) modes share.
+ * (bench_scaling.c) and --grids (bench_grids.c) modes share.
  */
 #ifndef BSPRAY_TOOLS_BENCH_H
 #define BSPRAY_TOOLS_BENCH_H
@@ -8,6 +8,7 @@
 #include <stddef.h>
 
 #include "bspray/bspray.h"
+#include "cli.h"
 
 /* Compares ACCEL with NAIVE on NRAND seeded random rays around SCENE and on
  * a 64 x 64 grid of the camera's eye rays: the same primitive, a
@@ -35,13 +36,50 @@ double bench_cpu_seconds(void);
  * other SPD scene. */
 extern const char *const bench_default_scenes[];
 
-/* Room for the scenes of a command line of ARGC words, or for DEFAULTS
- * (NULL-terminated), whichever is more (free()); exits with a message when
- * out of memory, as load_scene does. */
-const char **bench_scene_array(int argc, const char *const *defaults);
-/* N scenes were given in SCENES: when none, copies DEFAULTS there. Returns
- * the count. */
-int bench_scenes_or_defaults(const char **scenes, int n, const char *const *defaults);
+/* The command line of a bench mode. The mode presets the fields to its
+ * defaults (TAKES: which of the shared options it accepts; MODE_FLAG: the
+ * word that chose the mode, skipped; DEFAULT_SCENES: when no scene is given;
+ * RES_MIN: the least --res, 1 when 0; bench_cmdline_init sets the shared
+ * defaults); bench_read_cmdline fills the rest. */
+enum {
+    BENCH_TAKES_RENDER = 1, /* --res, --depth, --mailbox, --validate */
+    BENCH_TAKES_REPEAT = 2, /* --repeat */
+    BENCH_TAKES_COSTS = 4,  /* the SAH cost model (parse_cost_arg) */
+    BENCH_TAKES_PLOT = 8    /* --plot */
+};
+typedef struct bench_cmdline {
+    unsigned takes;
+    const char *mode_flag;
+    const char *const *default_scenes;
+    int res_min;
+    int res, depth, mailbox, nvalidate; /* BENCH_TAKES_RENDER */
+    int repeat, repeat_given;           /* BENCH_TAKES_REPEAT */
+    cost_args costs;                    /* BENCH_TAKES_COSTS */
+    const char *plot_path;              /* BENCH_TAKES_PLOT */
+    int threads, quiet;                 /* always: --threads, --quiet (-q) */
+    const char *csv_path;               /* always: --csv */
+    const char **scenes;                /* the operands (free: bench_free_cmdline) */
+    int nscenes;
+} bench_cmdline;
+/* A mode's own options: consumes a->argv[a->i] (S; and its value, or takes
+ * it as a scene) and returns 1, or returns 0 when it is none of them. */
+typedef int (*bench_own_option)(args *a, const char *s, void *ctx);
+/* Reads a->argv[a->i..]: the shared options into C, the others through OWN
+ * (may be NULL) with CTX, every other operand as a scene; an unknown option
+ * is a usage error. Returns 1 when --help was asked for (HELP printed it;
+ * C is freed), else 0. */
+int bench_read_cmdline(args *a, bench_cmdline *c, bench_own_option own, void *ctx,
+                       void (*help)(void));
+/* C zeroed, then the defaults the modes share: 513 x 513 rays of depth 4,
+ * mailboxes on, 3 repeats, every thread. */
+void bench_cmdline_init(bench_cmdline *c, unsigned takes, const char *mode_flag,
+                        const char *const *default_scenes);
+/* After the command line, before the long run: the default scenes when none
+ * was given, the --plot file writable, (CHECK_LOAD) every scene loadable,
+ * and the --csv file opened into *CSV (else NULL). 1, or 0 after a message,
+ * C then freed. */
+int bench_cmdline_ready(bench_cmdline *c, int check_load, FILE **csv);
+void bench_free_cmdline(bench_cmdline *c);
 
 /* --plot: a bar chart on a log scale written to PATH, one group of bars per
  * scene (SCENES[0..NSCENES), shown without an "spd:" prefix) and one bar

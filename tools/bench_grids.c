@@ -62,7 +62,7 @@ static const char *const grid_scenes[] = {"balls", "gears",  "lattice", "mount",
 
 static void print_help(void)
 {
-    printf("%s\n\n", grids_usage);
+    printf("usage: %s\n\n", grids_usage);
     printf("Havran's uniform grids (Havran and Sixta 1999, the statistics beside bspray's\n"
            "kd-tree comparison) reproduced: for each of his scenes and the three resolutions\n"
            "he lists, bspray's grid at that resolution with his assignment (a primitive in\n"
@@ -138,50 +138,38 @@ static const char *havran_scene(const char *scene)
     return NULL;
 }
 
+/* --grids takes Havran's scene names as its operands. */
+static int grids_scene(args *a, const char *s, void *ctx)
+{
+    bench_cmdline *c = ctx;
+    if (s[0] == '-' && s[1])
+        return 0;
+    if (!havran_scene(s))
+        die_usage(a->usage,
+                  "'%s' is not one of Havran's grid scenes (balls gears lattice mount rings "
+                  "teapot tetra tree)",
+                  s);
+    c->scenes[c->nscenes++] = havran_scene(s);
+    return 1;
+}
+
 int bench_grids(int argc, char **argv)
 {
     args a = {argc, 1, argv, grids_usage, NULL};
-    int threads = default_threads(), quiet = 0;
-    const char *csv_path = NULL;
-    const char **scenes = bench_scene_array(argc, grid_scenes);
-    int nscenes = 0;
-    for (; a.i < argc; a.i++) {
-        const char *s = argv[a.i];
-        if (is_help(s)) {
-            print_help();
-            free(scenes);
-            return 0;
-        } else if (!strcmp(s, "--grids")) {
-            continue;
-        } else if (!strcmp(s, "--threads")) {
-            threads = parse_int(&a, s, 1, 256);
-        } else if (!strcmp(s, "--csv")) {
-            csv_path = opt_value(&a, s);
-        } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
-            quiet = 1;
-        } else if (s[0] == '-' && s[1]) {
-            die_usage(a.usage, "unknown option '%s'", s);
-        } else if (!havran_scene(s)) {
-            die_usage(a.usage,
-                      "'%s' is not one of Havran's grid scenes (balls gears lattice mount "
-                      "rings teapot tetra tree)",
-                      s);
-        } else {
-            scenes[nscenes++] = havran_scene(s);
-        }
-    }
-    nscenes = bench_scenes_or_defaults(scenes, nscenes, grid_scenes);
-    FILE *csv = NULL;
-    if (csv_path) {
-        if (!(csv = fopen(csv_path, "w"))) {
-            fprintf(stderr, "%s: %s: cannot open for writing\n", prog, csv_path);
-            free(scenes);
-            return EXIT_INPUT;
-        }
+    bench_cmdline cl;
+    bench_cmdline_init(&cl, 0, "--grids", grid_scenes);
+    if (bench_read_cmdline(&a, &cl, grids_scene, &cl, print_help))
+        return 0;
+    FILE *csv;
+    if (!bench_cmdline_ready(&cl, 0, &csv))
+        return EXIT_INPUT;
+    const char **scenes = cl.scenes;
+    int nscenes = cl.nscenes, threads = cl.threads, quiet = cl.quiet;
+    const char *csv_path = cl.csv_path;
+    if (csv)
         fprintf(csv, "scene,res_x,res_y,res_z,N_V,N_EV,N_EV_havran,N_OIV,N_OIV_havran,N_IT,"
                      "N_IT_havran,N_TS,N_TS_havran,N_EETS,N_EETS_havran,N_IT_default_grid,"
                      "validated_rays\n");
-    }
     printf("| scene | cells | N_EV ours / his | N_OIV ours / his | N_IT ours / his | N_TS ours / "
            "his | N_EETS ours / his | N_IT, default grid |\n");
     printf("|---|---|---:|---:|---:|---:|---:|---:|\n");
@@ -243,6 +231,6 @@ int bench_grids(int argc, char **argv)
         fprintf(stderr, "%s: %s: write failed\n", prog, csv_path);
         rc = EXIT_INPUT;
     }
-    free(scenes);
+    bench_free_cmdline(&cl);
     return rc;
 }

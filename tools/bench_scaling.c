@@ -51,8 +51,7 @@ const char *const bench_scaling_default_scenes[] = {
 typedef struct scaling_opts {
     bsp_accel_kind kinds[MAX_KINDS];
     int nkinds;
-    int repeat, repeat_given, threads, quiet;
-    cost_args costs; /* --costs, --empty-bonus, --min-saving, --leaf-budget */
+    bench_cmdline cl;
 } scaling_opts;
 
 /* The figures of one scene x method. */
@@ -131,10 +130,10 @@ static void timed_builds(const scaling_opts *o, const bsp_scene *scene, scaling_
     bsp_build_options_defaults(&bo);
     bo.kind = r->kind;
     bo.threads = threads;
-    apply_cost_args(&o->costs, &bo);
+    apply_cost_args(&o->cl.costs, &bo);
     *cpu = *wall = INFINITY;
     for (int rep = 0; rep < r->builds; rep++) {
-        if (!o->quiet)
+        if (!o->cl.quiet)
             fprintf(stderr, "%s: %s (%zu primitives): %s: build %d of %d on %d thread%s\n", prog,
                     r->scene, r->n, bsp_accel_kind_name(r->kind), rep + 1, r->builds, threads,
                     threads == 1 ? "" : "s");
@@ -157,14 +156,14 @@ static void timed_builds(const scaling_opts *o, const bsp_scene *scene, scaling_
 
 static void measure(const scaling_opts *o, const bsp_scene *scene, scaling_row *r)
 {
-    r->builds = o->repeat;
-    if (!o->repeat_given && r->n > SCALING_BIG_PRIMS && r->builds > SCALING_BIG_REPEAT)
+    r->builds = o->cl.repeat;
+    if (!o->cl.repeat_given && r->n > SCALING_BIG_PRIMS && r->builds > SCALING_BIG_REPEAT)
         r->builds = SCALING_BIG_REPEAT;
     timed_builds(o, scene, r, 1, &r->t1_cpu, &r->t1_wall);
     r->tn_wall = r->t1_wall;
-    if (o->threads > 1 && kind_builds_in_parallel(r->kind)) {
+    if (o->cl.threads > 1 && kind_builds_in_parallel(r->kind)) {
         double cpu_unused;
-        timed_builds(o, scene, r, o->threads, &cpu_unused, &r->tn_wall);
+        timed_builds(o, scene, r, o->cl.threads, &cpu_unused, &r->tn_wall);
     }
 }
 
@@ -372,79 +371,49 @@ static int write_plot(const char *path, const scaling_row *rows, int nrows)
     return rc;
 }
 
+/* --scaling's own option: --accel, trees only. */
+static int scaling_option(args *a, const char *s, void *ctx)
+{
+    scaling_opts *o = ctx;
+    if (strcmp(s, "--accel"))
+        return 0;
+    o->nkinds = parse_accel_list(a, opt_value(a, s), o->kinds, MAX_KINDS);
+    for (int k = 0; k < o->nkinds; k++)
+        if (o->kinds[k] == BSP_ACCEL_NAIVE)
+            die_usage(a->usage, "%s", "--scaling times tree builds; naive has none");
+    return 1;
+}
+
 int bench_scaling(int argc, char **argv)
 {
     args a = {argc, 1, argv, scaling_usage, NULL};
     scaling_opts o;
     memset(&o, 0, sizeof o);
     o.kinds[o.nkinds++] = BSP_ACCEL_SAH;
-    o.repeat = 3;
-    o.threads = default_threads();
-    const char *csv_path = NULL, *plot_path = NULL;
-    const char **scenes = bench_scene_array(argc, bench_scaling_default_scenes);
-    int nscenes = 0;
-    for (; a.i < argc; a.i++) {
-        const char *s = argv[a.i];
-        if (is_help(s)) {
-            print_help();
-            free(scenes);
-            return 0;
-        } else if (!strcmp(s, "--scaling")) {
-            continue;
-        } else if (!strcmp(s, "--accel")) {
-            o.nkinds = parse_accel_list(&a, opt_value(&a, s), o.kinds, MAX_KINDS);
-            for (int k = 0; k < o.nkinds; k++)
-                if (o.kinds[k] == BSP_ACCEL_NAIVE)
-                    die_usage(a.usage, "%s", "--scaling times tree builds; naive has none");
-        } else if (!strcmp(s, "--repeat")) {
-            o.repeat = parse_int(&a, s, 1, 100);
-            o.repeat_given = 1;
-        } else if (!strcmp(s, "--threads")) {
-            o.threads = parse_int(&a, s, 1, 256);
-        } else if (!strcmp(s, "--csv")) {
-            csv_path = opt_value(&a, s);
-        } else if (!strcmp(s, "--plot")) {
-            plot_path = opt_value(&a, s);
-        } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
-            o.quiet = 1;
-        } else if (parse_cost_arg(&a, &o.costs)) {
-            continue;
-        } else if (s[0] == '-' && s[1]) {
-            die_usage(a.usage, "unknown option '%s'", s);
-        } else {
-            scenes[nscenes++] = s;
-        }
-    }
-    if (plot_path && !output_path_writable(plot_path)) { /* before minutes of builds */
-        free(scenes);
+    bench_cmdline_init(&o.cl, BENCH_TAKES_REPEAT | BENCH_TAKES_COSTS | BENCH_TAKES_PLOT,
+                       "--scaling", bench_scaling_default_scenes);
+    if (bench_read_cmdline(&a, &o.cl, scaling_option, &o, print_help))
+        return 0;
+    FILE *csv;
+    if (!bench_cmdline_ready(&o.cl, 1, &csv))
         return EXIT_INPUT;
-    }
-    nscenes = bench_scenes_or_defaults(scenes, nscenes, bench_scaling_default_scenes);
-    if (!scenes_loadable(scenes, nscenes)) {
-        free(scenes);
-        return EXIT_INPUT;
-    }
+    const char **scenes = o.cl.scenes;
+    int nscenes = o.cl.nscenes;
+    const char *csv_path = o.cl.csv_path, *plot_path = o.cl.plot_path;
     scaling_row *rows = calloc((size_t)nscenes * (size_t)o.nkinds, sizeof *rows);
     if (!rows) {
         fprintf(stderr, "%s: out of memory\n", prog);
-        free(scenes);
+        if (csv)
+            fclose(csv);
+        bench_free_cmdline(&o.cl);
         return EXIT_INPUT;
     }
-    FILE *csv = NULL;
-    if (csv_path) {
-        if (!(csv = fopen(csv_path, "w"))) {
-            fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, csv_path,
-                    strerror(errno));
-            free(rows);
-            free(scenes);
-            return EXIT_INPUT;
-        }
+    if (csv)
         csv_header(csv);
-    }
     printf("## Build-time scaling (T_B 1t: best single-threaded build, thread CPU time; "
            "T_B %dt: wall clock)\n\n",
-           o.threads);
-    print_header(o.threads);
+           o.cl.threads);
+    print_header(o.cl.threads);
     int nrows = 0, mismatch = 0;
     for (int s = 0; s < nscenes; s++) {
         bsp_scene *scene = load_scene(scenes[s]); /* exits 1 with a message */
@@ -456,12 +425,12 @@ int bench_scaling(int argc, char **argv)
             measure(&o, scene, r);
             print_row(r);
             if (csv)
-                csv_row(csv, r, o.threads);
+                csv_row(csv, r, o.cl.threads);
             if (r->mismatch) {
                 fprintf(stderr,
                         "%s: %s: %s: the builds made different trees (1 and %d threads, "
                         "or repeated builds): the build is not deterministic\n",
-                        prog, r->scene, bsp_accel_kind_name(r->kind), o.threads);
+                        prog, r->scene, bsp_accel_kind_name(r->kind), o.cl.threads);
                 mismatch = 1;
             }
         }
@@ -479,6 +448,6 @@ int bench_scaling(int argc, char **argv)
         rc = EXIT_INPUT;
     }
     free(rows);
-    free(scenes);
+    bench_free_cmdline(&o.cl);
     return rc;
 }

@@ -75,14 +75,12 @@ typedef struct cell {
 } cell;
 
 typedef struct paper_opts {
-    int res, depth, threads, nvalidate, quiet, repeat;
+    bench_cmdline cl;     /* mailbox: traversal with mailboxes (default 1) */
     int cost_termination; /* 0: split to the limits, as the paper */
-    int mailbox;          /* traversal with mailboxes (default 1) */
     bsp_mixed_model mixed_model; /* sah-mixed's model of the other rays */
     int mixed_check;             /* sah-mixed's check against sah (default 1) */
     paper_rule rules[MAX_RULES];
     int nrules;
-    cost_args costs; /* --costs, --empty-bonus, --min-saving, --leaf-budget */
 } paper_opts;
 
 static void print_help(void)
@@ -151,12 +149,12 @@ static int build_cell(const paper_opts *o, const char *name, const bsp_scene *sc
     bo.max_depth = 18;
     bo.max_leaf_prims = 2;
     bo.sah_split_to_limits = !o->cost_termination;
-    bo.threads = o->threads; /* T_B on as many threads as the render (default 1) */
-    bo.mailbox = o->mailbox;
+    bo.threads = o->cl.threads; /* T_B on as many threads as the render (default 1) */
+    bo.mailbox = o->cl.mailbox;
     bo.mixed_model = o->mixed_model;
     bo.mixed_check = o->mixed_check;
-    apply_cost_args(&o->costs, &bo);
-    if (!o->quiet)
+    apply_cost_args(&o->cl.costs, &bo);
+    if (!o->cl.quiet)
         fprintf(stderr, "%s: %s: %s: building\n", prog, name, r->label);
     bsp_accel *accel = build_accel(scene, &bo);
     c->t_build = bsp_accel_build_seconds(accel);
@@ -165,7 +163,7 @@ static int build_cell(const paper_opts *o, const char *name, const bsp_scene *sc
     bsp_accel_mixed_check(accel, &chk);
     c->kept_sah = chk.ran && chk.kept_sah;
     char what[256];
-    if (bench_validate(accel, naive, scene, o->nvalidate, what, sizeof what) < 0) {
+    if (bench_validate(accel, naive, scene, o->cl.nvalidate, what, sizeof what) < 0) {
         fprintf(stderr, "%s: %s: %s differs from the naive method on %s; aborting\n", prog, name,
                 r->label, what);
         bsp_accel_destroy(accel);
@@ -185,9 +183,9 @@ static int render_cell(const paper_opts *o, const char *name, const paper_rule *
 {
     bsp_render_options ro;
     bsp_render_options_defaults(&ro);
-    ro.width = ro.height = o->res;
-    ro.max_depth = o->depth;
-    ro.threads = o->threads;
+    ro.width = ro.height = o->cl.res;
+    ro.max_depth = o->cl.depth;
+    ro.threads = o->cl.threads;
     ro.orthographic = r->ortho;
     bsp_render_stats st;
     bsp_error err;
@@ -200,7 +198,7 @@ static int render_cell(const paper_opts *o, const char *name, const paper_rule *
         fprintf(stderr, "%s: %s: %s\n", prog, name, err.message);
         return 1;
     }
-    double t = o->threads == 1 ? cpu : st.render_seconds;
+    double t = o->cl.threads == 1 ? cpu : st.render_seconds;
     c->t_render = t < c->t_render ? t : c->t_render;
     const bsp_ray_class_stats *P = &st.cls[BSP_RAY_PRIMARY];
     uint64_t tests = 0, steps = 0;
@@ -235,10 +233,10 @@ static int run_scene(const paper_opts *o, const char *name, const bsp_scene *sce
     for (int r = 0; r < o->nrules && rc == 0; r++)
         rc = build_cell(o, name, scene, naive, &o->rules[r], &cells[r], &trees[r]);
     bsp_accel_destroy(naive);
-    for (int rep = 0; rep < o->repeat && rc == 0; rep++) {
-        if (!o->quiet)
+    for (int rep = 0; rep < o->cl.repeat && rc == 0; rep++) {
+        if (!o->cl.quiet)
             fprintf(stderr, "%s: %s: rendering, round %d of %d\n", prog, name, rep + 1,
-                    o->repeat);
+                    o->cl.repeat);
         for (int r = 0; r < o->nrules && rc == 0; r++)
             rc = render_cell(o, name, &o->rules[r], trees[r], &cells[r]);
     }
@@ -424,8 +422,8 @@ static void print_tables(const table *t)
     rule_rows(t, "# traversal steps per ray", F_NTS, 1);
 
     printf("\n### Times (seconds; render on %d thread%s, %s, best of %d round%s)\n\n",
-           o->threads, o->threads == 1 ? "" : "s", o->threads == 1 ? "CPU time" : "wall clock",
-           o->repeat, o->repeat == 1 ? "" : "s");
+           o->cl.threads, o->cl.threads == 1 ? "" : "s", o->cl.threads == 1 ? "CPU time" : "wall clock",
+           o->cl.repeat, o->cl.repeat == 1 ? "" : "s");
     header(t, "scene");
     rule_rows(t, "T_B build", F_TB, 0);
     rule_rows(t, "T_TR render", F_TR, 0);
@@ -485,7 +483,7 @@ static void csv_rows(FILE *f, const table *t)
                         figure_of(c, F_COV, 0), all ? c->rays_all : c->rays_primary,
                         c->tree.leaves, all ? c->nit_all : c->nit_primary,
                         all ? c->nts_all : c->nts_primary, c->t_build, c->t_render,
-                        t->o->threads, c->kept_sah ? "sah" : bsp_accel_kind_name(pr->kind));
+                        t->o->cl.threads, c->kept_sah ? "sah" : bsp_accel_kind_name(pr->kind));
         }
 }
 
@@ -511,7 +509,7 @@ static int write_plot(const char *path, const table *t)
         }
         char title[160];
         snprintf(title, sizeof title, "BUILD + RENDER TIME (%d X %d, DEPTH %d, %d THREAD%s)",
-                 o->res, o->res, o->depth, o->threads, o->threads == 1 ? "" : "S");
+                 o->cl.res, o->cl.res, o->cl.depth, o->cl.threads, o->cl.threads == 1 ? "" : "S");
         rc = bench_write_bars(path, title, "T_B + T_TR IN SECONDS, LOG SCALE (LOWER IS FASTER)",
                               t->scenes, ns, names, nr, v);
     }
@@ -520,93 +518,59 @@ static int write_plot(const char *path, const table *t)
     return rc;
 }
 
+/* --paper's own options. */
+static int paper_option(args *a, const char *s, void *ctx)
+{
+    paper_opts *o = ctx;
+    if (!strcmp(s, "--accel"))
+        parse_rules(a, o);
+    else if (!strcmp(s, "--mixed-model"))
+        o->mixed_model = parse_mixed_model(a, s);
+    else if (!strcmp(s, "--mixed-check"))
+        o->mixed_check = parse_on_off(a, s);
+    else if (!strcmp(s, "--cost-termination"))
+        o->cost_termination = 1;
+    else
+        return 0;
+    return 1;
+}
+
 int bench_paper(int argc, char **argv)
 {
     args a = {argc, 1, argv, paper_usage, NULL};
     paper_opts o;
     memset(&o, 0, sizeof o);
-    o.res = 513;
-    o.depth = 4;
-    o.threads = 1;
-    o.nvalidate = 5000;
-    o.repeat = 3;
-    o.mailbox = 1;
+    bench_cmdline_init(&o.cl,
+                       BENCH_TAKES_RENDER | BENCH_TAKES_REPEAT | BENCH_TAKES_COSTS |
+                           BENCH_TAKES_PLOT,
+                       "--paper", bench_default_scenes);
+    o.cl.res_min = 2;
+    o.cl.threads = 1;
+    o.cl.nvalidate = 5000;
     o.mixed_model = BSP_MIXED_COUNTED;
     o.mixed_check = 1;
     o.nrules = (int)(sizeof default_rules / sizeof default_rules[0]);
     memcpy(o.rules, default_rules, sizeof default_rules);
-    const char *csv_path = NULL, *plot_path = NULL;
-    const char **scenes = bench_scene_array(argc, bench_default_scenes);
-    int nscenes = 0;
-    for (; a.i < argc; a.i++) {
-        const char *s = argv[a.i];
-        if (is_help(s)) {
-            print_help();
-            free(scenes);
-            return 0;
-        } else if (!strcmp(s, "--paper")) {
-            continue;
-        } else if (parse_cost_arg(&a, &o.costs)) {
-            continue;
-        } else if (!strcmp(s, "--accel")) {
-            parse_rules(&a, &o);
-        } else if (!strcmp(s, "--res")) {
-            o.res = parse_int(&a, s, 2, 65536);
-        } else if (!strcmp(s, "--depth")) {
-            o.depth = parse_int(&a, s, 0, 64);
-        } else if (!strcmp(s, "--threads")) {
-            o.threads = parse_int(&a, s, 1, 256);
-        } else if (!strcmp(s, "--validate")) {
-            o.nvalidate = parse_int(&a, s, 0, 100000000);
-        } else if (!strcmp(s, "--mailbox")) {
-            o.mailbox = parse_on_off(&a, s);
-        } else if (!strcmp(s, "--mixed-model")) {
-            o.mixed_model = parse_mixed_model(&a, s);
-        } else if (!strcmp(s, "--mixed-check")) {
-            o.mixed_check = parse_on_off(&a, s);
-        } else if (!strcmp(s, "--cost-termination")) {
-            o.cost_termination = 1;
-        } else if (!strcmp(s, "--repeat")) {
-            o.repeat = parse_int(&a, s, 1, 100);
-        } else if (!strcmp(s, "--csv")) {
-            csv_path = opt_value(&a, s);
-        } else if (!strcmp(s, "--plot")) {
-            plot_path = opt_value(&a, s);
-        } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
-            o.quiet = 1;
-        } else if (s[0] == '-' && s[1]) {
-            die_usage(a.usage, "unknown option '%s'", s);
-        } else {
-            scenes[nscenes++] = s;
-        }
-    }
-    if (plot_path && !output_path_writable(plot_path)) { /* before minutes of renders */
-        free(scenes);
+    if (bench_read_cmdline(&a, &o.cl, paper_option, &o, print_help))
+        return 0;
+    FILE *csv;
+    if (!bench_cmdline_ready(&o.cl, 1, &csv))
         return EXIT_INPUT;
-    }
-    nscenes = bench_scenes_or_defaults(scenes, nscenes, bench_default_scenes);
-    if (!scenes_loadable(scenes, nscenes)) {
-        free(scenes);
-        return EXIT_INPUT;
-    }
-    FILE *csv = NULL;
-    if (csv_path && !(csv = fopen(csv_path, "w"))) {
-        fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, csv_path, strerror(errno));
-        free(scenes);
-        return EXIT_INPUT;
-    }
+    const char **scenes = o.cl.scenes;
+    int nscenes = o.cl.nscenes;
+    const char *csv_path = o.cl.csv_path, *plot_path = o.cl.plot_path;
     table t = {&o, scenes, nscenes, calloc((size_t)nscenes * (size_t)o.nrules, sizeof(cell))};
     if (!t.cells) {
         fprintf(stderr, "%s: out of memory\n", prog);
         if (csv)
             fclose(csv);
-        free(scenes);
+        bench_free_cmdline(&o.cl);
         return EXIT_INPUT;
     }
     printf("## Table 1: BSP trees for restricted ray sets (%d x %d rays, ray depth %d, tree "
            "depth 18, 2 primitives per leaf%s, %s%s%s)\n",
-           o.res, o.res, o.depth, o.cost_termination ? ", leaves also by cost" : "",
-           o.mailbox ? "mailboxes" : "no mailboxes",
+           o.cl.res, o.cl.res, o.cl.depth, o.cost_termination ? ", leaves also by cost" : "",
+           o.cl.mailbox ? "mailboxes" : "no mailboxes",
            o.mixed_model == BSP_MIXED_SAMPLED   ? ", sah-mixed sampled"
            : o.mixed_model == BSP_MIXED_SURFACE ? ", sah-mixed surface"
                                                 : ", sah-mixed counted",
@@ -634,6 +598,6 @@ int bench_paper(int argc, char **argv)
         }
     }
     free(t.cells);
-    free(scenes);
+    bench_free_cmdline(&o.cl);
     return rc ? EXIT_INPUT : 0;
 }
