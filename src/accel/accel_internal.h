@@ -51,15 +51,18 @@ static inline uint32_t query_mailbox_next(bsp_query *q, size_t nprims)
 }
 
 /* Adds one query's counts to Q: INTERIOR nodes and LEAVES (cells) visited,
- * NONEMPTY of them with entries, REFS entries met (tested or skipped by the
- * mailbox), TESTS intersection tests. */
+ * NONEMPTY of them with entries, SKIPPED empty leaves the ray passed through
+ * without visiting them (a kd traversal's empty near children: cells
+ * traversed, N_ETS and N_EETS, but no step, N_TS), REFS entries met (tested
+ * or skipped by the mailbox), TESTS intersection tests. */
 static inline void query_count(bsp_query *q, uint64_t interior, uint64_t leaves,
-                               uint64_t nonempty, uint64_t refs, uint64_t tests)
+                               uint64_t skipped, uint64_t nonempty, uint64_t refs,
+                               uint64_t tests)
 {
     q->counters.traversal_steps += interior + leaves;
     q->counters.isect_tests += tests;
-    q->counters.leaves_visited += leaves;
-    q->counters.empty_leaves += leaves - nonempty;
+    q->counters.leaves_visited += leaves + skipped;
+    q->counters.empty_leaves += leaves + skipped - nonempty;
     q->counters.mailbox_hits += refs - tests;
 }
 

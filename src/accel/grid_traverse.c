@@ -146,7 +146,7 @@ int grid_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_
         if (best.t <= w.tnext[k] || !dda_step(g, o, d, &w, k))
             break; /* the closest hit lies in this cell, or the ray leaves the box */
     }
-    query_count(q, 0, cells, nonempty, refs, tests);
+    query_count(q, 0, cells, 0, nonempty, refs, tests);
     if (best_p == BSP_NO_PRIM)
         return 0;
     scene_hit_finish(&best, best_p, hit);
@@ -188,6 +188,6 @@ int grid_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t
             found = scene_isect(s, p, &r, ray->tmax, &h);
         }
     } while (!found && dda_step(g, o, d, &w, exit_axis(&w)));
-    query_count(q, 0, cells, nonempty, refs, tests);
+    query_count(q, 0, cells, 0, nonempty, refs, tests);
     return found;
 }

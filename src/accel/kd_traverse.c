@@ -210,10 +210,18 @@ static inline double node_split(const char *base, size_t off)
     return (double)f;
 }
 
+/* A ray's counts of interior nodes visited and of empty leaves skipped,
+ * packed in one word (the low and the high 32 bits: a ray meets fewer than
+ * 2^32 nodes), so the descent's skips add a constant and its loop keeps one
+ * counter. */
+#define KD_SKIPPED_ONE ((uint64_t)1 << 32)
+#define KD_STEPS_MASK (KD_SKIPPED_ONE - 1)
+
 /* Descends from the node at byte offset OFF of BASE (the walk nodes,
  * kd_walk.h) to a leaf between the entry point EN and the exit point *EX (the
- * top of the stack), pushing the far children and counting interior nodes in
- * *STEPS; returns the leaf's offset. Each "both" case pushes its own far
+ * top of the stack), pushing the far children and counting interior nodes and
+ * skipped empty leaves in *STEPS (packed: KD_SKIPPED_ONE); returns the leaf's
+ * offset. Each "both" case pushes its own far
  * child (no near/far selection: 3 moves per push fewer). A node is tracked as
  * its byte offset, and the next node's load takes the offset of the
  * children's pair (bits & ~15) with the right child's +8 as the load's
@@ -226,7 +234,8 @@ static inline double node_split(const char *base, size_t off)
  *   returned, whose word is in cache, instead of a load of the child's;
  * - the segment crosses the plane from an empty near child: nothing is
  *   pushed and the far child is entered at the crossing (EN moves there).
- *   The empty leaf is not visited and not counted: it holds nothing to test,
+ *   The empty leaf is not visited (no step) but counted as a cell traversed
+ *   (N_ETS, N_EETS, as Havran counts the cells a ray passes): it holds nothing to test,
  *   and the closest hit's stop test loses nothing, since no hit lies in an
  *   empty cell (the invariant of kd_tree.h) and a best hit before it was
  *   already caught by the stop test of the cell before it.
@@ -274,6 +283,7 @@ descend(const char *base, size_t off, const trav_ray *r, double *en, exit_point 
             /* N4: A < s < B, left then right */
             if (bits & KD_WALK_LEFT_EMPTY) {
                 skip_to_far(r, axis, s, en);
+                *steps += KD_SKIPPED_ONE;
                 off = right;
                 NODE_WORD(base, left, sizeof(kd_node), w);
                 continue;
@@ -294,6 +304,7 @@ descend(const char *base, size_t off, const trav_ray *r, double *en, exit_point 
             /* P4: B <= s < A, right then left; B < s: A and B differ */
             if (bits & KD_WALK_RIGHT_EMPTY) {
                 skip_to_far(r, axis, s, en);
+                *steps += KD_SKIPPED_ONE;
                 off = left;
                 NODE_WORD(base, left, 0, w);
                 continue;
@@ -360,14 +371,14 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t 
      * leaf, its test would find the same hit at t = tmax, not a better one,
      * so it is not made (the hit record is the one memory of the ray) */
     uint32_t best_l = UINT32_MAX;
-    uint64_t interior = 0, leaves = 0, nonempty = 0, refs = 0, tests = 0;
+    uint64_t steps = 0, leaves = 0, nonempty = 0, refs = 0, tests = 0;
     const char *base = (const char *)t->walk; /* kd_walk.h */
     size_t off = 0; /* the root */
     const uint32_t *lref = t->lref; /* the leaf lists in local numbers (kd_local.h) */
     const kd_local *loc = t->loc;
     exit_point *ex = stack;
     for (;;) {
-        off = descend(base, off, &tr, en, &ex, &interior);
+        off = descend(base, off, &tr, en, &ex, &steps);
         const kd_node *n = (const kd_node *)(base + off);
         uint32_t cnt = kd_count(n);
         leaves++;
@@ -400,7 +411,7 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t 
             break; /* the closest hit lies inside this cell, or this is the last cell */
         off = pop_exit(en, &ex);
     }
-    query_count(q, interior, leaves, nonempty, refs, tests);
+    query_count(q, steps & KD_STEPS_MASK, leaves, steps >> 32, nonempty, refs, tests);
     if (best_p == BSP_NO_PRIM)
         return 0;
     scene_hit_finish(&best, best_p, hit);
@@ -429,14 +440,14 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t f
     const double tmax = ray->tmax;
     scene_isect_hit h;
     int found = 0;
-    uint64_t interior = 0, leaves = 0, nonempty = 0, refs = 0, tests = 0;
+    uint64_t steps = 0, leaves = 0, nonempty = 0, refs = 0, tests = 0;
     const char *base = (const char *)t->walk; /* kd_walk.h */
     size_t off = 0; /* the root */
     const uint32_t *lref = t->lref; /* the leaf lists in local numbers (kd_local.h) */
     const kd_local *loc = t->loc;
     exit_point *ex = stack;
     for (;;) {
-        off = descend(base, off, &tr, en, &ex, &interior);
+        off = descend(base, off, &tr, en, &ex, &steps);
         const kd_node *n = (const kd_node *)(base + off);
         uint32_t cnt = kd_count(n);
         leaves++;
@@ -466,6 +477,6 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t f
             break; /* the ray leaves the root box */
         off = pop_exit(en, &ex);
     }
-    query_count(q, interior, leaves, nonempty, refs, tests);
+    query_count(q, steps & KD_STEPS_MASK, leaves, steps >> 32, nonempty, refs, tests);
     return found;
 }
