@@ -24,10 +24,10 @@ static inline bsp_scene *fuzz_scene(const uint8_t *d, size_t n, bsp_accel_kind *
 {
     if (n < 1)
         return NULL;
-    static const bsp_accel_kind kinds[4] = {BSP_ACCEL_SAH, BSP_ACCEL_KAPLAN, BSP_ACCEL_SAH_PER,
-                                            BSP_ACCEL_GRID};
+    static const bsp_accel_kind kinds[5] = {BSP_ACCEL_SAH, BSP_ACCEL_KAPLAN, BSP_ACCEL_SAH_PER,
+                                            BSP_ACCEL_GRID, BSP_ACCEL_OCTREE};
     int fmt = d[0] % 3;
-    *kind = kinds[(d[0] / 3) % 4];
+    *kind = kinds[(d[0] / 3) % 5];
     const char *buf = (const char *)d + 1;
     bsp_scene *s = NULL;
     bsp_error err = {0};

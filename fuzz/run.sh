@@ -20,9 +20,10 @@ make -s build/bspray >/dev/null
 seeds=build-fuzz/seeds
 rm -rf "$seeds" && mkdir -p "$seeds"
 # An input is one byte choosing the reader (value mod 3: NFF, OBJ, PLY) and
-# the structure (value / 3: sah, kaplan, sah-per), then the file.
-seed() { # FORMAT FILE NAME: three seeds, one per structure
-    for k in 0 1 2; do
+# the structure (value / 3 mod 5: sah, kaplan, sah-per, grid, octree), then
+# the file.
+seed() { # FORMAT FILE NAME: five seeds, one per structure
+    for k in 0 1 2 3 4; do
         { printf "\\$(printf '%03o' $((k * 3 + $1)))"; cat "$2"; } >"$seeds/$3-$k"
     done
 }

@@ -75,8 +75,8 @@ TEST(cli_bench_table_and_csv)
     CHECK_RUN(cmd, 1, "b.png: cannot open for writing");
     /* the default scene list runs too (here with one method on a tiny size
      * would take long; just check that an unknown method is a usage error) */
-    snprintf(cmd, sizeof cmd, "%s bench spd:balls:1 --accel octree 2>&1", harness_cli());
-    CHECK_RUN(cmd, 2, "unknown acceleration method 'octree'");
+    snprintf(cmd, sizeof cmd, "%s bench spd:balls:1 --accel quadtree 2>&1", harness_cli());
+    CHECK_RUN(cmd, 2, "unknown acceleration method 'quadtree'");
     snprintf(cmd, sizeof cmd, "%s bench spd:balls:1 --repeat 0 2>&1", harness_cli());
     CHECK_RUN(cmd, 2, "'--repeat'");
 }

@@ -149,7 +149,7 @@ TEST(cli_bench_scaling_help_and_bad_arguments)
         {"spd:balls:2 /nonexistent/scene.nff", 1, "/nonexistent/scene.nff: cannot open"},
         {"spd:balls:2 --repeat 0", 2, "--repeat"},
         {"spd:balls:2 --repeat many", 2, "--repeat"},
-        {"spd:balls:2 --accel octree", 2, "unknown acceleration method 'octree'"},
+        {"spd:balls:2 --accel quadtree", 2, "unknown acceleration method 'quadtree'"},
         {"spd:balls:2 --accel naive", 2, "naive"},
         {"spd:balls:2 --frobnicate", 2, "unknown option '--frobnicate'"},
         {"spd:balls:2 --threads 0", 2, "--threads"},

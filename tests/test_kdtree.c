@@ -130,11 +130,11 @@ static int same_hit(int f1, const bsp_hit *a, int f2, const bsp_hit *b)
 static int quick_skips_view_variant(const bsp_scene *scene, int kind, int mailbox)
 {
     return harness_quick() && !mailbox && kind >= BSP_ACCEL_SAH_PER &&
-           bsp_scene_prim_count(scene) > 2000;
+           kind <= BSP_ACCEL_SAH_MIXED && bsp_scene_prim_count(scene) > 2000;
 }
 
-/* The variants the exactness tests compare with naive: every kd rule, and
- * the uniform grid (the last kind), with and without mailboxes, sah-mixed's three models among them (sampled
+/* The variants the exactness tests compare with naive: every kd rule, the
+ * uniform grid and the octree, with and without mailboxes, sah-mixed's three models among them (sampled
  * without mailboxes, surface and counted with them), each sah-mixed tree
  * kept whatever its check against sah would choose. Fills O[0..n), returns
  * n (at most KD_VARIANTS_MAX). */
@@ -214,14 +214,20 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
         g.box.lo = bsp_v3(-1, -1, -1);
         g.box.hi = bsp_v3(1, 1, 1);
     }
-    /* the planes of the last kd-tree and of the grid (the last variant) */
+    /* the planes of the last adaptive kd-tree, then of the grid and of the
+     * octree (their last variants) */
     for (int v = nv - 1; v >= 0; v--)
-        if (bsp_accel_get_kind(acc[v]) != BSP_ACCEL_GRID) {
-            collect_planes(acc[v], &g.planes, 3072);
+        if (bsp_accel_get_kind(acc[v]) < BSP_ACCEL_GRID) {
+            collect_planes(acc[v], &g.planes, 2048);
             break;
         }
-    if (nv > 0)
-        collect_planes(acc[nv - 1], &g.planes, 4096);
+    static const bsp_accel_kind regular[] = {BSP_ACCEL_GRID, BSP_ACCEL_OCTREE};
+    for (int k = 0; k < 2; k++)
+        for (int v = nv - 1; v >= 0; v--)
+            if (bsp_accel_get_kind(acc[v]) == regular[k]) {
+                collect_planes(acc[v], &g.planes, k == 0 ? 3072 : 4096);
+                break;
+            }
     rng = seed;
     int bad = 0, hits = 0, from_checked = 0;
     for (int i = 0; i < nrays && bad < 5; i++) {

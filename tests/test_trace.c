@@ -408,7 +408,7 @@ TEST(cli_usage_errors)
         {"render x.nff --res 0", "whole number from 1 to 65536", 2},
         {"render x.nff --res 12abc", "whole number", 2},
         {"render x.nff --depth 99", "whole number from 0 to 64", 2},
-        {"render x.nff --accel octree", "unknown acceleration method 'octree'", 2},
+        {"render x.nff --accel quadtree", "unknown acceleration method 'quadtree'", 2},
         {"render x.nff --sampling sideways", "spd or centres", 2},
         {"trace x.nff", "missing --rays", 2},
         {"stats", "missing SCENE", 2},

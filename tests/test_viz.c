@@ -377,7 +377,7 @@ TEST(viz_cli_writes_panels_and_rejects_bad_input)
 
     snprintf(cmd, sizeof cmd, "%s viz spd:balls:1 --bogus -o %s 2>/dev/null", harness_cli(), out);
     CHECK_EQ_INT(run_status(cmd), 2);
-    snprintf(cmd, sizeof cmd, "%s viz spd:balls:1 --accel sah,octree -o %s 2>/dev/null",
+    snprintf(cmd, sizeof cmd, "%s viz spd:balls:1 --accel sah,quadtree -o %s 2>/dev/null",
              harness_cli(), out);
     CHECK_EQ_INT(run_status(cmd), 2);
     snprintf(cmd, sizeof cmd, "%s viz spd:balls:1 --size 0 -o %s 2>/dev/null", harness_cli(), out);

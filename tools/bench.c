@@ -38,7 +38,8 @@ static const char bench_usage[] =
     "                        [--plot FILE.png] [--quiet]\n"
     "       bspray bench --paper [SCENE...] [--accel LIST] [--csv FILE] ...  (see --paper --help)\n"
     "       bspray bench --scaling [SCENE...] [--accel LIST] [--repeat N] ...  (see --scaling --help)\n"
-    "       bspray bench --grids [SCENE...] [--csv FILE] ...  (see --grids --help)";
+    "       bspray bench --grids [SCENE...] [--csv FILE] ...  (see --grids --help)\n"
+    "       bspray bench --octrees [SCENE...] [--csv FILE] ...  (see --octrees --help)";
 
 /* The default scene list of bench and bench --paper: every SPD database at
  * its default size, teapot at the size of the SPD Readme and Havran's
@@ -561,6 +562,8 @@ int cmd_bench(int argc, char **argv)
             return bench_scaling(argc, argv);
         else if (!strcmp(argv[i], "--grids"))
             return bench_grids(argc, argv);
+        else if (!strcmp(argv[i], "--octrees"))
+            return bench_octrees(argc, argv);
     args a = {argc, 1, argv, bench_usage, NULL};
     bench_opts o;
     memset(&o, 0, sizeof o);

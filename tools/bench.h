@@ -104,5 +104,47 @@ int bench_scaling(int argc, char **argv);
 /* `bspray bench --grids ...`: Havran's uniform grids reproduced
  * (bench_grids.c). */
 int bench_grids(int argc, char **argv);
+/* `bspray bench --octrees ...`: Havran's octrees reproduced (bench_octrees.c). */
+int bench_octrees(int argc, char **argv);
+
+/* --- Havran's 1999 statistics (bench_havran.c) --- */
+
+/* His SPD scenes (NULL-terminated): balls gears lattice mount rings teapot
+ * tetra tree. */
+extern const char *const havran_scenes[];
+/* A bench_own_option (CTX the bench_cmdline): an operand must be one of his
+ * scenes (or spd:NAME), kept by its bare name; else a usage error. */
+int havran_scene_arg(args *a, const char *s, void *ctx);
+/* Calls FN for each scene of CL (bare NAME, "spd:NAME", the scene
+ * generated in code and the naive method over it) until FN returns
+ * non-zero, which is returned. */
+typedef int (*havran_scene_fn)(const char *bare, const char *name, const bsp_scene *scene,
+                               const bsp_accel *naive, void *ctx);
+int havran_each_scene(const bench_cmdline *cl, havran_scene_fn fn, void *ctx);
+/* His per-ray figures of a render (every class): N_IT, N_TS, N_ETS, N_EETS. */
+typedef struct havran_figures {
+    double nit, nts, nets, neets;
+} havran_figures;
+/* ACCEL validated against NAIVE (2,000 random rays and the eye rays), then
+ * a 513 x 513 render of ray depth 4 on THREADS threads into *F. Returns the
+ * rays validated, or -1 after a message naming NAME and STRUCTURE. */
+long havran_measure(const bsp_accel *accel, const bsp_accel *naive, const char *name,
+                    const char *structure, int threads, havran_figures *f);
+/* A bench of his tables: its command line (USAGE, MODE_FLAG, HELP; the
+ * operands his scenes, --threads, --csv, --quiet), the CSV's header line,
+ * the Markdown table's header (its two lines), and EACH, called for every
+ * scene with a havran_run as its context, printing its rows. */
+typedef struct havran_run {
+    int threads, quiet;
+    FILE *csv; /* NULL without --csv */
+} havran_run;
+typedef struct havran_bench {
+    const char *usage, *mode_flag;
+    void (*help)(void);
+    const char *csv_header, *table_header;
+    havran_scene_fn each;
+} havran_bench;
+/* Runs B on the command line ARGC, ARGV; returns the exit status. */
+int havran_bench_main(int argc, char **argv, const havran_bench *b);
 
 #endif /* BSPRAY_TOOLS_BENCH_H */

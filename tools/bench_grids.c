@@ -57,9 +57,6 @@ static const havran_row havran_rows[] = {
 };
 #define HAVRAN_ROWS (sizeof havran_rows / sizeof *havran_rows)
 
-static const char *const grid_scenes[] = {"balls", "gears",  "lattice", "mount",
-                                          "rings", "teapot", "tetra",   "tree", NULL};
-
 static void print_help(void)
 {
     printf("usage: %s\n\n", grids_usage);
@@ -80,41 +77,6 @@ static void print_help(void)
            "  --help         this text\n");
 }
 
-/* The figures of one render: per ray of all classes. */
-typedef struct ray_figures {
-    double nit, nts, neets;
-} ray_figures;
-
-/* Renders SCENE through ACCEL (513 x 513, depth 4) into *F; 0 with a
- * message when the render fails. */
-static int render_figures(const bsp_accel *accel, const char *name, int threads, ray_figures *f)
-{
-    bsp_render_options ro;
-    bsp_render_options_defaults(&ro);
-    ro.width = ro.height = 513;
-    ro.max_depth = 4;
-    ro.threads = threads;
-    bsp_image *img = NULL;
-    bsp_render_stats st;
-    bsp_error err;
-    if (bsp_render(accel, &ro, &img, &st, &err) != BSP_OK) {
-        fprintf(stderr, "%s: %s: %s\n", prog, name, err.message);
-        return 0;
-    }
-    bsp_image_destroy(img);
-    double rays = 0, it = 0, ts = 0, eets = 0;
-    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
-        rays += (double)st.cls[c].rays;
-        it += (double)st.cls[c].isect_tests;
-        ts += (double)st.cls[c].traversal_steps;
-        eets += (double)st.cls[c].empty_leaves;
-    }
-    f->nit = rays > 0 ? it / rays : 0;
-    f->nts = rays > 0 ? ts / rays : 0;
-    f->neets = rays > 0 ? eets / rays : 0;
-    return 1;
-}
-
 /* The grid of ROW over SCENE: Havran's (bounds, no mailboxes) or the
  * default one (clipped, mailboxes) at his resolution. */
 static bsp_accel *row_grid(const bsp_scene *scene, const havran_row *row, int havrans)
@@ -128,109 +90,59 @@ static bsp_accel *row_grid(const bsp_scene *scene, const havran_row *row, int ha
     return build_accel(scene, &o);
 }
 
-/* SCENE's name without "spd:", if it is one of Havran's; else NULL. */
-static const char *havran_scene(const char *scene)
+/* His three grids of one scene, ours beside. */
+static int grids_of_scene(const char *bare, const char *name, const bsp_scene *scene,
+                          const bsp_accel *naive, void *ctx)
 {
-    const char *name = strncmp(scene, "spd:", 4) == 0 ? scene + 4 : scene;
-    for (int i = 0; grid_scenes[i]; i++)
-        if (!strcmp(name, grid_scenes[i]))
-            return grid_scenes[i];
-    return NULL;
-}
-
-/* --grids takes Havran's scene names as its operands. */
-static int grids_scene(args *a, const char *s, void *ctx)
-{
-    bench_cmdline *c = ctx;
-    if (s[0] == '-' && s[1])
-        return 0;
-    if (!havran_scene(s))
-        die_usage(a->usage,
-                  "'%s' is not one of Havran's grid scenes (balls gears lattice mount rings "
-                  "teapot tetra tree)",
-                  s);
-    c->scenes[c->nscenes++] = havran_scene(s);
-    return 1;
+    const havran_run *run = ctx;
+    for (size_t r = 0; r < HAVRAN_ROWS; r++) {
+        const havran_row *h = &havran_rows[r];
+        if (strcmp(h->scene, bare) != 0)
+            continue;
+        if (!run->quiet)
+            fprintf(stderr, "%s: %s: grid %d x %d x %d\n", prog, name, h->res[0], h->res[1],
+                    h->res[2]);
+        bsp_accel *hg = row_grid(scene, h, 1), *dg = row_grid(scene, h, 0);
+        havran_figures f, fd;
+        long checked = havran_measure(hg, naive, name, "grid", run->threads, &f);
+        long checked_d =
+            checked < 0 ? -1 : havran_measure(dg, naive, name, "default grid", run->threads, &fd);
+        if (checked >= 0 && checked_d >= 0) {
+            bsp_tree_stats st;
+            bsp_accel_tree_stats(hg, &st);
+            printf("| %s | %d x %d x %d | %llu / %lu | %llu / %lu | %.2f / %.2f | %.2f / %.2f "
+                   "| %.2f / %.2f | %.2f |\n",
+                   h->scene, h->res[0], h->res[1], h->res[2], (unsigned long long)st.empty_leaves,
+                   h->nev, (unsigned long long)st.references, h->noiv, f.nit, h->nit, f.nts,
+                   h->nts, f.neets, h->neets, fd.nit);
+            fflush(stdout);
+            if (run->csv)
+                fprintf(run->csv,
+                        "%s,%d,%d,%d,%llu,%llu,%lu,%llu,%lu,%.4f,%.2f,%.4f,%.2f,%.4f,%.2f,%.4f,"
+                        "%ld\n",
+                        h->scene, h->res[0], h->res[1], h->res[2], (unsigned long long)st.leaves,
+                        (unsigned long long)st.empty_leaves, h->nev,
+                        (unsigned long long)st.references, h->noiv, f.nit, h->nit, f.nts, h->nts,
+                        f.neets, h->neets, fd.nit, checked + checked_d);
+        }
+        bsp_accel_destroy(hg);
+        bsp_accel_destroy(dg);
+        if (checked < 0 || checked_d < 0)
+            return EXIT_INPUT;
+    }
+    return 0;
 }
 
 int bench_grids(int argc, char **argv)
 {
-    args a = {argc, 1, argv, grids_usage, NULL};
-    bench_cmdline cl;
-    bench_cmdline_init(&cl, 0, "--grids", grid_scenes);
-    if (bench_read_cmdline(&a, &cl, grids_scene, &cl, print_help))
-        return 0;
-    FILE *csv;
-    if (!bench_cmdline_ready(&cl, 0, &csv))
-        return EXIT_INPUT;
-    const char **scenes = cl.scenes;
-    int nscenes = cl.nscenes, threads = cl.threads, quiet = cl.quiet;
-    const char *csv_path = cl.csv_path;
-    if (csv)
-        fprintf(csv, "scene,res_x,res_y,res_z,N_V,N_EV,N_EV_havran,N_OIV,N_OIV_havran,N_IT,"
-                     "N_IT_havran,N_TS,N_TS_havran,N_EETS,N_EETS_havran,N_IT_default_grid,"
-                     "validated_rays\n");
-    printf("| scene | cells | N_EV ours / his | N_OIV ours / his | N_IT ours / his | N_TS ours / "
-           "his | N_EETS ours / his | N_IT, default grid |\n");
-    printf("|---|---|---:|---:|---:|---:|---:|---:|\n");
-    int rc = 0;
-    for (int si = 0; si < nscenes && rc == 0; si++) {
-        char name[64];
-        snprintf(name, sizeof name, "spd:%s", scenes[si]);
-        bsp_scene *scene = load_scene(name);
-        bsp_build_options no;
-        bsp_build_options_defaults(&no);
-        no.kind = BSP_ACCEL_NAIVE;
-        bsp_accel *naive = build_accel(scene, &no);
-        for (size_t r = 0; r < HAVRAN_ROWS && rc == 0; r++) {
-            const havran_row *h = &havran_rows[r];
-            if (strcmp(h->scene, scenes[si]) != 0)
-                continue;
-            if (!quiet)
-                fprintf(stderr, "%s: %s: grid %d x %d x %d\n", prog, name, h->res[0], h->res[1],
-                        h->res[2]);
-            bsp_accel *hg = row_grid(scene, h, 1), *dg = row_grid(scene, h, 0);
-            char what[256];
-            long checked = bench_validate(hg, naive, scene, 2000, what, sizeof what);
-            long checked_d = checked < 0 ? -1 : bench_validate(dg, naive, scene, 2000, what,
-                                                                 sizeof what);
-            ray_figures f, fd;
-            if (checked < 0 || checked_d < 0) {
-                fprintf(stderr, "%s: %s: the grid %d x %d x %d differs from naive: %s; aborting\n",
-                        prog, name, h->res[0], h->res[1], h->res[2], what);
-                rc = EXIT_INPUT;
-            } else if (!render_figures(hg, name, threads, &f) ||
-                       !render_figures(dg, name, threads, &fd)) {
-                rc = EXIT_INPUT;
-            } else {
-                bsp_tree_stats st;
-                bsp_accel_tree_stats(hg, &st);
-                printf("| %s | %d x %d x %d | %llu / %lu | %llu / %lu | %.2f / %.2f | %.2f / %.2f "
-                       "| %.2f / %.2f | %.2f |\n",
-                       h->scene, h->res[0], h->res[1], h->res[2],
-                       (unsigned long long)st.empty_leaves, h->nev,
-                       (unsigned long long)st.references, h->noiv, f.nit, h->nit, f.nts, h->nts,
-                       f.neets, h->neets, fd.nit);
-                fflush(stdout);
-                if (csv)
-                    fprintf(csv,
-                            "%s,%d,%d,%d,%llu,%llu,%lu,%llu,%lu,%.4f,%.2f,%.4f,%.2f,%.4f,%.2f,"
-                            "%.4f,%ld\n",
-                            h->scene, h->res[0], h->res[1], h->res[2],
-                            (unsigned long long)st.leaves, (unsigned long long)st.empty_leaves,
-                            h->nev, (unsigned long long)st.references, h->noiv, f.nit, h->nit,
-                            f.nts, h->nts, f.neets, h->neets, fd.nit, checked + checked_d);
-            }
-            bsp_accel_destroy(hg);
-            bsp_accel_destroy(dg);
-        }
-        bsp_accel_destroy(naive);
-        bsp_scene_destroy(scene);
-    }
-    if (csv && fclose(csv) != 0) {
-        fprintf(stderr, "%s: %s: write failed\n", prog, csv_path);
-        rc = EXIT_INPUT;
-    }
-    bench_free_cmdline(&cl);
-    return rc;
+    static const havran_bench b = {
+        grids_usage,
+        "--grids",
+        print_help,
+        "scene,res_x,res_y,res_z,N_V,N_EV,N_EV_havran,N_OIV,N_OIV_havran,N_IT,N_IT_havran,N_TS,"
+        "N_TS_havran,N_EETS,N_EETS_havran,N_IT_default_grid,validated_rays",
+        "| scene | cells | N_EV ours / his | N_OIV ours / his | N_IT ours / his | N_TS ours / his "
+        "| N_EETS ours / his | N_IT, default grid |\n|---|---|---:|---:|---:|---:|---:|---:|",
+        grids_of_scene};
+    return havran_bench_main(argc, argv, &b);
 }

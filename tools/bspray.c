@@ -553,11 +553,13 @@ static int cmd_stats(int argc, char **argv)
             printf("  load[s]        %.4f\n", bsp_accel_build_seconds(accel));
         else
             printf("  T_B[s]         %.4f\n", bsp_accel_build_seconds(accel));
-        printf("  N_IN           %" PRIu64 "\n", t.interior_nodes);
+        printf("  N_IN           %" PRIu64 "%s\n", t.interior_nodes,
+               kind == BSP_ACCEL_OCTREE ? " (octree nodes of 8 children, 3 kd levels each)" : "");
         printf("  N_V            %" PRIu64 "\n", t.leaves);
         printf("  N_EV           %" PRIu64 "\n", t.empty_leaves);
         printf("  N_OIV          %" PRIu64 "\n", t.references);
-        printf("  leaf depth     max %d, mean %.2f\n", t.max_leaf_depth, t.avg_leaf_depth);
+        printf("  leaf depth     max %d, mean %.2f%s\n", t.max_leaf_depth, t.avg_leaf_depth,
+               kind == BSP_ACCEL_OCTREE ? " (octree levels)" : "");
         printf("  bytes          %" PRIu64 " (nodes and leaf lists)\n", t.bytes);
         if (t.trace_bytes)
             printf("  trace bytes    %" PRIu64 " (the traversal's copies: the primitives in leaf\n"

@@ -303,7 +303,8 @@ void json_real(FILE *f, double x)
 
 int kind_builds_in_parallel(bsp_accel_kind k)
 {
-    return k != BSP_ACCEL_NAIVE && k != BSP_ACCEL_KAPLAN && k != BSP_ACCEL_GRID;
+    return k != BSP_ACCEL_NAIVE && k != BSP_ACCEL_KAPLAN && k != BSP_ACCEL_GRID &&
+           k != BSP_ACCEL_OCTREE;
 }
 
 void tree_stats_json(FILE *f, const char *indent, const bsp_tree_stats *t, bsp_accel_kind kind)
@@ -543,12 +544,14 @@ int parse_grid_arg(args *a, bsp_build_options *opts)
 
 const char build_args_help[] =
     "  --accel METHOD     acceleration method: sah (default), sah-per, sah-par, sah-mixed,\n"
-    "                     kaplan, grid (a uniform grid), naive (sah-per/-par/-mixed build\n"
-    "                     for the camera's rays)\n"
+    "                     kaplan, grid (a uniform grid), octree (centre subdivision), naive\n"
+    "                     (sah-per/-par/-mixed build for the camera's rays)\n"
     "  --mailbox on|off   test each primitive at most once per ray (default on)\n"
-    "  --max-depth N      kd-tree: deepest leaf (default kaplan 18, sah round(8 + 1.3 log2 N))\n"
+    "  --max-depth N      kd-tree: deepest leaf (default kaplan 18, sah round(8 + 1.3 log2 N));\n"
+    "                     octree: its levels, at most 21 (default: the least d, 8^d >= 8 N)\n"
     "  --leaf-size N      kd-tree: a node of at most N primitives is a leaf (default kaplan\n"
-    "                     2, sah 1: the cost decides); the paper: --max-depth 18 --leaf-size 2\n"
+    "                     2, sah 1: the cost decides, octree 1); the paper: --max-depth 18\n"
+    "                     --leaf-size 2\n"
     "  --split-to-limits  sah family: split until --max-depth or --leaf-size ends it, even\n"
     "                     where the cost model would make a leaf (the paper's criteria)\n"
     "  --mixed-share F    sah-mixed: share of primary rays among all rays, in (0, 1]\n"
@@ -561,8 +564,8 @@ const char build_args_help[] =
     "                     rays through both and keep the cheaper (default on)\n"
     "  --build-threads N  sah family: build threads (default: every core); the tree is\n"
     "                     the same for any N\n"
-    "  --max-tree-mb N    kd-tree, grid: fail when the nodes (cells) and lists need more\n"
-    "                     than N MiB (default: half the machine's memory)\n"
+    "  --max-tree-mb N    kd-tree, octree, grid: fail when the nodes (cells) and lists\n"
+    "                     need more than N MiB (default: half the machine's memory)\n"
     GRID_ARGS_HELP COST_ARGS_HELP;
 
 int parse_build_arg(args *a, bsp_build_options *opts)

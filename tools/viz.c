@@ -48,9 +48,10 @@ static const char viz_help[] =
     "  -o FILE          output image, (2 x SIZE) by (methods x SIZE) pixels; .ppm writes\n"
     "                   binary PPM, anything else PNG (required)\n"
     "  --accel LIST     comma-separated methods, one row each: kaplan, sah, sah-per,\n"
-    "                   sah-par, sah-mixed (default sah), or grid (see --grid-*)\n"
+    "                   sah-par, sah-mixed (default sah), octree, or grid (see --grid-*)\n"
     "  --max-depth N    the trees' maximum depth (default 10, the paper's setting for\n"
-    "                   its pictures); also the end of the depth colour scale\n"
+    "                   its pictures); also the end of the depth colour scale. An octree\n"
+    "                   gets (N + 2) / 3 levels (three kd levels each)\n"
     "  --leaf-size N    a node with at most N primitives becomes a leaf (default: the\n"
     "                   method's own)\n"
     "  --color depth    (default) colour leaves by depth\n"
@@ -230,7 +231,8 @@ int cmd_viz(int argc, char **argv)
         bsp_build_options bopts;
         bsp_build_options_defaults(&bopts);
         bopts.kind = rows[r].kind;
-        bopts.max_depth = max_depth;
+        /* an octree level is three kd levels: about as deep as the kd-trees */
+        bopts.max_depth = rows[r].kind == BSP_ACCEL_OCTREE ? (max_depth + 2) / 3 : max_depth;
         bopts.max_leaf_prims = leaf_size;
         apply_cost_args(&costs, &bopts);
         bopts.grid_density = grid_opts.grid_density;

@@ -39,6 +39,10 @@ typedef enum bsp_accel_kind {
     BSP_ACCEL_GRID,      /* uniform grid (Fujimoto et al. 1986), traversed by a 3D-DDA
                             (Amanatides & Woo 1987): the classic baseline of Havran's
                             grid statistics; see bsp_build_options.grid_density */
+    BSP_ACCEL_OCTREE,    /* octree of centre subdivision (Glassner 1984), kept as a
+                            kd-tree of three levels per octree node and traversed as
+                            one; primitives listed by their bounds, as in Havran's
+                            1999 octree statistics. max_depth counts octree levels */
     BSP_ACCEL_KIND_COUNT
 } bsp_accel_kind;
 
@@ -50,6 +54,8 @@ typedef enum bsp_accel_kind {
 
 /* Hard ceiling of kd-tree depth (it sizes the traversal stack). */
 #define BSP_KD_MAX_DEPTH_LIMIT 64
+/* The octree's deepest level: three kd levels each, within that ceiling. */
+#define BSP_OCTREE_MAX_DEPTH 21
 
 /* Costs of the SAH cost model (MacDonald & Booth): a split costs
  * traversal + (A_L/A) sum T_i(L) + (A_R/A) sum T_i(R), a leaf sum T_i, where
@@ -108,9 +114,12 @@ typedef struct bsp_build_options {
     bsp_accel_kind kind;
     int mailbox;        /* 1: test each primitive at most once per ray (default 1) */
     int max_depth;      /* kd-trees: deepest leaf, 1..BSP_KD_MAX_DEPTH_LIMIT; 0: the
-                           method's default (kaplan: 18, the paper's value) */
+                           method's default (kaplan: 18, the paper's value). octree:
+                           its levels, 1..BSP_OCTREE_MAX_DEPTH (0: the default,
+                           by the primitive count: docs/octree.md) */
     int max_leaf_prims; /* kd-trees: a node with at most this many primitives becomes a
-                           leaf; 0: the method's default (kaplan: 2, the paper's value) */
+                           leaf; 0: the method's default (kaplan: 2, the paper's value;
+                           octree: 1, Havran's) */
                         /* sah: max_depth 0 means round(8 + 1.3 log2 N), max_leaf_prims 0
                            means 1 (the cost decides); the paper's setting is 18 and 2 */
     bsp_sah_costs sah_costs; /* sah: cost model; 0 fields take the defaults */
@@ -242,7 +251,8 @@ bsp_status bsp_accel_load(const bsp_scene *scene, const char *path, bsp_accel **
 
 /* Figures of a built tree, with Havran's names (all 0 for the naive method). */
 typedef struct bsp_tree_stats {
-    uint64_t interior_nodes; /* N_IN */
+    uint64_t interior_nodes; /* N_IN (an octree: its nodes of eight children, each three
+                                kd nodes; its leaf depths count octree levels too) */
     uint64_t leaves;         /* N_V */
     uint64_t empty_leaves;   /* N_EV */
     uint64_t references;     /* N_OIV: primitive references in leaves */

@@ -13,7 +13,7 @@
 #include "accel/kd_tree.h"
 
 static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {
-    "naive", "kaplan", "sah", "sah-per", "sah-par", "sah-mixed", "grid"};
+    "naive", "kaplan", "sah", "sah-per", "sah-par", "sah-mixed", "grid", "octree"};
 
 size_t accel_max_bytes(const bsp_build_options *o)
 {
@@ -91,6 +91,7 @@ bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts
     case BSP_ACCEL_SAH_PER:
     case BSP_ACCEL_SAH_PAR:
     case BSP_ACCEL_SAH_MIXED:
+    case BSP_ACCEL_OCTREE:
         st = kd_accel_build(a, err);
         if (st == BSP_OK && a->opts.kind == BSP_ACCEL_SAH_MIXED && a->opts.mixed_check)
             st = kd_mixed_check(a, err);

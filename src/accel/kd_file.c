@@ -200,10 +200,11 @@ bsp_status bsp_accel_save(const bsp_accel *a, const char *path, bsp_error *err)
     if (a->opts.kind == BSP_ACCEL_NAIVE || !a->impl)
         return error_set(err, BSP_ERR_INVALID, path, 0,
                          "the naive method has no structure to save");
-    if (a->opts.kind == BSP_ACCEL_GRID)
+    if (a->opts.kind == BSP_ACCEL_GRID || a->opts.kind == BSP_ACCEL_OCTREE)
         return error_set(err, BSP_ERR_INVALID, path, 0,
-                         "only kd-trees are saved; a grid is rebuilt (it builds in about the "
-                         "time a load takes)");
+                         "only the kd-trees of kaplan and the sah family are saved; this %s "
+                         "is rebuilt instead (it builds in about the time a load takes)",
+                         bsp_accel_kind_name(a->opts.kind));
     const kd_tree *t = a->impl;
     size_t plen = strlen(path);
     char *part = malloc(plen + 32);

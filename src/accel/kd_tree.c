@@ -206,14 +206,16 @@ typedef struct stats_walk {
 static void stats_node(stats_walk *w, uint32_t i, bsp_box box, int depth)
 {
     const kd_node *n = &w->t->nodes[i];
+    /* an octree's figures count its own nodes and levels: three kd levels each */
+    int group = w->t->octree ? 3 : 1;
     if (kd_is_leaf(n)) {
         uint32_t c = kd_count(n);
         w->st->leaves++;
         w->st->empty_leaves += c == 0;
         w->st->references += c;
-        w->depth_sum += depth;
-        if (depth > w->st->max_leaf_depth)
-            w->st->max_leaf_depth = depth;
+        w->depth_sum += depth / group;
+        if (depth / group > w->st->max_leaf_depth)
+            w->st->max_leaf_depth = depth / group;
         double area = box_area(box), tsum = 0.0;
         const uint32_t *list = w->t->prims + n->u.first;
         for (uint32_t j = 0; j < c; j++)
@@ -222,7 +224,7 @@ static void stats_node(stats_walk *w, uint32_t i, bsp_box box, int depth)
         w->model += area * tsum;
         return;
     }
-    w->st->interior_nodes++;
+    w->st->interior_nodes += depth % group == 0;
     double area = box_area(box);
     w->cost += area;
     w->model += area * w->costs->traversal;
@@ -492,20 +494,24 @@ bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
     bsp_build_options *o = &a->opts;
     int sah_family = o->kind == BSP_ACCEL_SAH || o->kind == BSP_ACCEL_SAH_PER ||
                      o->kind == BSP_ACCEL_SAH_PAR || o->kind == BSP_ACCEL_SAH_MIXED;
+    int octree = o->kind == BSP_ACCEL_OCTREE;
     if (sah_family)
         kd_sah_default_limits(o, a->scene);
     if (o->max_depth == 0)
-        o->max_depth = 18;
+        o->max_depth = octree ? kd_octree_default_depth(bsp_scene_prim_count(a->scene)) : 18;
     if (o->max_leaf_prims == 0)
-        o->max_leaf_prims = 2;
-    if (o->max_depth < 1 || o->max_depth > BSP_KD_MAX_DEPTH_LIMIT)
-        return error_set(err, BSP_ERR_INVALID, NULL, 0, "kd-tree depth %d is outside 1..%d",
-                         o->max_depth, BSP_KD_MAX_DEPTH_LIMIT);
+        o->max_leaf_prims = octree ? 1 : 2;
+    int depth_limit = octree ? BSP_OCTREE_MAX_DEPTH : BSP_KD_MAX_DEPTH_LIMIT;
+    if (o->max_depth < 1 || o->max_depth > depth_limit)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "%s depth %d is outside 1..%d",
+                         octree ? "octree" : "kd-tree", o->max_depth, depth_limit);
     if (o->max_leaf_prims < 1)
         return error_set(err, BSP_ERR_INVALID, NULL, 0,
                          "kd-tree leaf size %d must be at least 1", o->max_leaf_prims);
     kd_tree *t = malloc(sizeof *t);
-    if (!t || !kd_tree_init(t, a->scene, o->max_depth, o->max_leaf_prims)) {
+    /* an octree level is three kd levels */
+    if (!t || !kd_tree_init(t, a->scene, octree ? 3 * o->max_depth : o->max_depth,
+                            o->max_leaf_prims)) {
         if (t)
             kd_tree_free(t);
         free(t);
@@ -516,6 +522,9 @@ bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
     switch (o->kind) {
     case BSP_ACCEL_KAPLAN:
         st = kd_build_median(t, a->scene, err);
+        break;
+    case BSP_ACCEL_OCTREE:
+        st = kd_build_octree(t, a->scene, err);
         break;
     case BSP_ACCEL_SAH:
         st = kd_build_sah(t, a->scene, o, err);

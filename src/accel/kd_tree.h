@@ -125,6 +125,9 @@ typedef struct kd_tree {
                            budget's estimate let the build cut at (-inf: none) */
     int budget_rebuilt; /* ... and 1 when the estimate proved too high and the tree
                            was built again without it */
+    int octree;         /* 1: an octree in binary form (kd_build_octree); its figures
+                           count octree nodes (interior nodes and depths in octree
+                           levels: three binary levels each) */
 } kd_tree;
 
 /* Makes the traversal's copies of a finished tree over SCENE (kd_local.h,
@@ -171,6 +174,12 @@ HIDDEN bsp_box kd_prim_box(const kd_tree *t, const bsp_scene *scene, uint32_t pr
 
 /* Kaplan's rule: spatial median, axes in turn. Fills T (already set up). */
 HIDDEN bsp_status kd_build_median(kd_tree *t, const bsp_scene *scene, bsp_error *err);
+/* The octree of centre subdivision as a kd-tree: three levels (x, y, z at
+ * the centre) per octree node, the limits decided at every third level
+ * (T->max_depth is then three times the octree's depth). Sets T->octree. */
+HIDDEN bsp_status kd_build_octree(kd_tree *t, const bsp_scene *scene, bsp_error *err);
+/* The octree's default depth for N primitives (docs/octree.md). */
+HIDDEN int kd_octree_default_depth(size_t n);
 /* Surface area heuristic, exact O(N log N) event build with perfect splits
  * (kd_split_sah.c, kd_sah_node.c). Fills T (already set up) with the costs of O. */
 HIDDEN bsp_status kd_build_sah(kd_tree *t, const bsp_scene *scene, const bsp_build_options *o,

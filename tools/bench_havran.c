@@ -1,0 +1,118 @@
+/*
+ * bench_havran.c — what `bench --grids` (bench_grids.c) and `bench --octrees`
+ * (bench_octrees.c) share: Havran's 1999 SPD scenes as operands, the loop
+ * over them with the naive method beside, and one structure measured the way
+ * his tables were (validated against naive, then a 513 x 513 render of ray
+ * depth 4, figures per ray of every class).
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include "bench.h"
+#include "cli.h"
+
+const char *const havran_scenes[] = {"balls", "gears", "lattice", "mount",
+                                     "rings", "teapot", "tetra",  "tree", NULL};
+
+/* SCENE's name without "spd:", if it is one of Havran's; else NULL. */
+static const char *havran_scene(const char *scene)
+{
+    const char *name = strncmp(scene, "spd:", 4) == 0 ? scene + 4 : scene;
+    for (int i = 0; havran_scenes[i]; i++)
+        if (!strcmp(name, havran_scenes[i]))
+            return havran_scenes[i];
+    return NULL;
+}
+
+int havran_scene_arg(args *a, const char *s, void *ctx)
+{
+    bench_cmdline *c = ctx;
+    if (s[0] == '-' && s[1])
+        return 0;
+    if (!havran_scene(s))
+        die_usage(a->usage,
+                  "'%s' is not one of Havran's scenes (balls gears lattice mount rings teapot "
+                  "tetra tree)",
+                  s);
+    c->scenes[c->nscenes++] = havran_scene(s);
+    return 1;
+}
+
+int havran_each_scene(const bench_cmdline *cl, havran_scene_fn fn, void *ctx)
+{
+    int rc = 0;
+    for (int si = 0; si < cl->nscenes && rc == 0; si++) {
+        char name[64];
+        snprintf(name, sizeof name, "spd:%s", cl->scenes[si]);
+        bsp_scene *scene = load_scene(name);
+        bsp_build_options no;
+        bsp_build_options_defaults(&no);
+        no.kind = BSP_ACCEL_NAIVE;
+        bsp_accel *naive = build_accel(scene, &no);
+        rc = fn(cl->scenes[si], name, scene, naive, ctx);
+        bsp_accel_destroy(naive);
+        bsp_scene_destroy(scene);
+    }
+    return rc;
+}
+
+long havran_measure(const bsp_accel *accel, const bsp_accel *naive, const char *name,
+                    const char *structure, int threads, havran_figures *f)
+{
+    char what[256];
+    long checked = bench_validate(accel, naive, bsp_accel_scene(accel), 2000, what, sizeof what);
+    if (checked < 0) {
+        fprintf(stderr, "%s: %s: the %s differs from naive: %s; aborting\n", prog, name,
+                structure, what);
+        return -1;
+    }
+    bsp_render_options ro;
+    bsp_render_options_defaults(&ro);
+    ro.width = ro.height = 513;
+    ro.max_depth = 4;
+    ro.threads = threads;
+    bsp_image *img = NULL;
+    bsp_render_stats st;
+    bsp_error err;
+    if (bsp_render(accel, &ro, &img, &st, &err) != BSP_OK) {
+        fprintf(stderr, "%s: %s: %s\n", prog, name, err.message);
+        return -1;
+    }
+    bsp_image_destroy(img);
+    double rays = 0, it = 0, ts = 0, ets = 0, eets = 0;
+    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
+        rays += (double)st.cls[c].rays;
+        it += (double)st.cls[c].isect_tests;
+        ts += (double)st.cls[c].traversal_steps;
+        ets += (double)st.cls[c].leaves_visited;
+        eets += (double)st.cls[c].empty_leaves;
+    }
+    double per = rays > 0 ? 1.0 / rays : 0.0;
+    f->nit = it * per;
+    f->nts = ts * per;
+    f->nets = ets * per;
+    f->neets = eets * per;
+    return checked;
+}
+
+int havran_bench_main(int argc, char **argv, const havran_bench *b)
+{
+    args a = {argc, 1, argv, b->usage, NULL};
+    bench_cmdline cl;
+    bench_cmdline_init(&cl, 0, b->mode_flag, havran_scenes);
+    if (bench_read_cmdline(&a, &cl, havran_scene_arg, &cl, b->help))
+        return 0;
+    havran_run run = {cl.threads, cl.quiet, NULL};
+    if (!bench_cmdline_ready(&cl, 0, &run.csv))
+        return EXIT_INPUT;
+    if (run.csv)
+        fprintf(run.csv, "%s\n", b->csv_header);
+    printf("%s\n", b->table_header);
+    int rc = havran_each_scene(&cl, b->each, &run);
+    if (run.csv && fclose(run.csv) != 0) {
+        fprintf(stderr, "%s: %s: write failed\n", prog, cl.csv_path);
+        rc = EXIT_INPUT;
+    }
+    bench_free_cmdline(&cl);
+    return rc;
+}
