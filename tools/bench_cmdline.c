@@ -1,6 +1,6 @@
 /*
  * bench_cmdline.c — the command line of every `bspray bench` mode (plain,
- * --paper, --scaling, --grids): the options they share are read here, once,
+ * --paper, --scaling, --grids, --octrees): the options they share are read here, once,
  * the same way; a mode's own options go through its callback.
  */
 #include <errno.h>
