@@ -134,6 +134,19 @@ TEST(octree_refuses_bad_options_and_saving)
     remove(path);
     bsp_accel_destroy(a);
     bsp_scene_destroy(s);
+    /* two coincident triangles share every octant down to the depth limit:
+     * the size limit stops the build, and says so in octree levels */
+    static const char two[] = "p 3\n0 0 0\n1 0 0\n0 1 0\np 3\n0 0 0\n1 0 0\n0 1 0\n";
+    REQUIRE(bsp_scene_load_nff_memory(two, sizeof two - 1, "two.nff", &s, &err) == BSP_OK);
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_OCTREE;
+    o.max_depth = BSP_OCTREE_MAX_DEPTH;
+    o.max_tree_bytes = (size_t)16 << 20;
+    a = NULL;
+    CHECK(bsp_accel_build(s, &o, &a, &err) == BSP_ERR_LIMIT && !a);
+    CHECK_STR_CONTAINS(err.message, "the octree outgrew its size limit (16.0 MiB");
+    CHECK_STR_CONTAINS(err.message, "maximum depth (now 21;");
+    bsp_scene_destroy(s);
 }
 
 /* Havran's Octree84-C figures: N_IN, N_V, N_EV, N_OIV. */

@@ -78,13 +78,15 @@ bsp_status kd_build_failed(const kd_tree *t, bsp_error *err)
 {
     if (!t->over_limit)
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the kd-tree");
+    /* an octree's depth is given in octree levels, three kd levels each */
     return error_set(
         err, BSP_ERR_LIMIT, NULL, 0,
-        "the kd-tree outgrew its size limit (%.1f MiB, and at most %u nodes) at %u nodes and "
+        "the %s outgrew its size limit (%.1f MiB, and at most %u kd nodes) at %u kd nodes and "
         "%zu references: lower the maximum depth (now %d; --max-depth), raise the leaf size "
         "(now %d; --leaf-size) or raise the limit (--max-tree-mb)",
-        (double)t->max_bytes / (1 << 20), (unsigned)KD_MAX_NODES, (unsigned)t->nnodes, t->nprims,
-        t->max_depth, t->max_leaf_prims);
+        t->octree ? "octree" : "kd-tree", (double)t->max_bytes / (1 << 20),
+        (unsigned)KD_MAX_NODES, (unsigned)t->nnodes, t->nprims,
+        t->octree ? t->max_depth / 3 : t->max_depth, t->max_leaf_prims);
 }
 
 int kd_reserve_nodes(kd_tree *t, size_t nodes)
