@@ -17,6 +17,7 @@
 
 #include "bspray/bspray.h"
 #include "harness.h"
+#include "havran_test_util.h"
 
 static bsp_accel *grid_of(const bsp_scene *s, double density, const int res[3], int mailbox,
                           int by_bounds)
@@ -138,17 +139,12 @@ static const havran_grid havran[] = {
     {"tetra", {35, 35, 35}, 42875, 37311, 35936},
 };
 
-/* The SPD database NAME generated in code: bit for bit the file of the SPD
- * programs that Havran measured (test_spd.c checks that), so these tests
- * need no ../shared. */
+/* The SPD database NAME generated in code (no ../shared needed). */
 static bsp_scene *spd_scene(const char *name)
 {
     char spec[64];
     snprintf(spec, sizeof spec, "spd:%s", name);
-    bsp_scene *s = NULL;
-    bsp_error err;
-    REQUIRE_MSG(bsp_scene_load(spec, &s, &err) == BSP_OK, "%s", err.message);
-    return s;
+    return havran_test_scene(spec);
 }
 
 TEST(grid_cells_match_havrans_at_his_resolutions)
@@ -195,14 +191,8 @@ TEST(grid_rays_match_havrans_on_balls)
     bsp_render_stats st;
     bsp_error err;
     REQUIRE(bsp_render(a, &o, &img, &st, &err) == BSP_OK);
-    double rays = 0, it = 0, ts = 0, ets = 0, eets = 0;
-    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
-        rays += (double)st.cls[c].rays;
-        it += (double)st.cls[c].isect_tests;
-        ts += (double)st.cls[c].traversal_steps;
-        ets += (double)st.cls[c].leaves_visited;
-        eets += (double)st.cls[c].empty_leaves;
-    }
+    havran_test_totals tot = havran_test_sum(&st);
+    double rays = tot.rays, it = tot.it, ts = tot.ts, ets = tot.ets, eets = tot.eets;
     REQUIRE(rays > 1e6);
     CHECK_MSG(fabs(it / rays / 358.66 - 1.0) < 0.05, "N_IT %.2f, Havran 358.66", it / rays);
     CHECK_MSG(fabs(ts / rays / 5.69 - 1.0) < 0.02, "N_TS %.2f, Havran 5.69", ts / rays);
@@ -305,9 +295,7 @@ TEST(cli_bench_grids_reproduces_havrans_tetra)
     while (fgets(line, sizeof line, f)) {
         /* scene,res_x,res_y,res_z,N_V,...: N_TS is the 12th field, his the 13th */
         char *fields[20];
-        int n = 0;
-        for (char *p = strtok(line, ","); p && n < 20; p = strtok(NULL, ","))
-            fields[n++] = p;
+        int n = havran_test_csv_fields(line, fields, 20);
         if (n < 17 || strcmp(fields[0], "tetra") != 0)
             continue;
         int rx = atoi(fields[1]), ry = atoi(fields[2]), rz = atoi(fields[3]);

@@ -19,14 +19,7 @@
 #include "accel/kd_tree.h"
 #include "bspray/bspray.h"
 #include "harness.h"
-
-static bsp_scene *spd_scene(const char *spec)
-{
-    bsp_scene *s = NULL;
-    bsp_error err;
-    REQUIRE_MSG(bsp_scene_load(spec, &s, &err) == BSP_OK, "%s", err.message);
-    return s;
-}
+#include "havran_test_util.h"
 
 /* The octree of depth DEPTH (0: the default) over S, checked. */
 static bsp_accel *octree_of(const bsp_scene *s, int depth, int mailbox)
@@ -64,7 +57,7 @@ TEST(octree_nodes_have_eight_children_and_keep_the_limits)
 {
     const char *scenes[] = {"spd:balls", "spd:tetra", "spd:gears", "spd:tree"};
     for (int i = 0; i < 4; i++) {
-        bsp_scene *s = spd_scene(scenes[i]);
+        bsp_scene *s = havran_test_scene(scenes[i]);
         for (int depth = 2; depth <= 5; depth++) {
             bsp_accel *a = octree_of(s, depth, 1);
             bsp_tree_stats st;
@@ -101,7 +94,7 @@ TEST(octree_default_depth_gives_eight_finest_cells_per_primitive)
     CHECK_EQ_INT(kd_octree_default_depth(4097), 6);
     CHECK_EQ_INT(kd_octree_default_depth((size_t)1 << 40), 15); /* 8^15 = 2^45 >= 2^43 */
     /* and a build without a depth takes it: tetra's 4,096 triangles */
-    bsp_scene *s = spd_scene("spd:tetra");
+    bsp_scene *s = havran_test_scene("spd:tetra");
     bsp_accel *a = octree_of(s, 0, 1);
     bsp_tree_stats st;
     bsp_accel_tree_stats(a, &st);
@@ -112,7 +105,7 @@ TEST(octree_default_depth_gives_eight_finest_cells_per_primitive)
 
 TEST(octree_refuses_bad_options_and_saving)
 {
-    bsp_scene *s = spd_scene("spd:balls:1");
+    bsp_scene *s = havran_test_scene("spd:balls:1");
     bsp_build_options o;
     bsp_build_options_defaults(&o);
     o.kind = BSP_ACCEL_OCTREE;
@@ -171,7 +164,7 @@ TEST(octree_matches_havrans_nodes_and_references)
     };
     for (size_t i = 0; i < sizeof his / sizeof *his; i++) {
         const octree_figures *h = &his[i];
-        bsp_scene *s = spd_scene(h->scene);
+        bsp_scene *s = havran_test_scene(h->scene);
         bsp_accel *a = octree_of(s, h->depth, 0);
         bsp_tree_stats st;
         bsp_accel_tree_stats(a, &st);
@@ -198,7 +191,7 @@ TEST(octree_rays_traverse_havrans_cells_on_balls)
     /* his depth-5 octree on balls, no mailboxes: N_ETS 15.39 and N_EETS
      * 9.52 cells per ray of the whole render (the empty cells the kd
      * traversal skips without a visit are counted, as cells traversed) */
-    bsp_scene *s = spd_scene("spd:balls");
+    bsp_scene *s = havran_test_scene("spd:balls");
     bsp_accel *a = octree_of(s, 5, 0);
     bsp_render_options o;
     bsp_render_options_defaults(&o);
@@ -206,12 +199,8 @@ TEST(octree_rays_traverse_havrans_cells_on_balls)
     bsp_render_stats st;
     bsp_error err;
     REQUIRE(bsp_render(a, &o, &img, &st, &err) == BSP_OK);
-    double rays = 0, ets = 0, eets = 0;
-    for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
-        rays += (double)st.cls[c].rays;
-        ets += (double)st.cls[c].leaves_visited;
-        eets += (double)st.cls[c].empty_leaves;
-    }
+    havran_test_totals tot = havran_test_sum(&st);
+    double rays = tot.rays, ets = tot.ets, eets = tot.eets;
     REQUIRE(rays > 1e6);
     CHECK_MSG(fabs(ets / rays / 15.39 - 1.0) < 0.02, "N_ETS %.2f, Havran 15.39", ets / rays);
     CHECK_MSG(fabs(eets / rays / 9.52 - 1.0) < 0.03, "N_EETS %.2f, Havran 9.52", eets / rays);
@@ -237,9 +226,7 @@ TEST(cli_bench_octrees_prints_his_figures_beside_ours)
     int rows = 0, depth_sum = 0;
     while (fgets(line, sizeof line, f)) {
         char *fields[24];
-        int n = 0;
-        for (char *p = strtok(line, ","); p && n < 24; p = strtok(NULL, ","))
-            fields[n++] = p;
+        int n = havran_test_csv_fields(line, fields, 24);
         if (n < 20 || strcmp(fields[0], "tetra") != 0)
             continue;
         rows++;

@@ -125,11 +125,14 @@ int havran_each_scene(const bench_cmdline *cl, havran_scene_fn fn, void *ctx);
 typedef struct havran_figures {
     double nit, nts, nets, neets;
 } havran_figures;
-/* ACCEL validated against NAIVE (2,000 random rays and the eye rays), then
- * a 513 x 513 render of ray depth 4 on THREADS threads into *F. Returns the
- * rays validated, or -1 after a message naming NAME and STRUCTURE. */
-long havran_measure(const bsp_accel *accel, const bsp_accel *naive, const char *name,
-                    const char *structure, int threads, havran_figures *f);
+/* HIS (the structure as his table built it) and OURS (bspray's variant of
+ * it), each validated against NAIVE (2,000 random rays and the eye rays),
+ * then rendered (513 x 513, ray depth 4, THREADS threads) into *F_HIS and
+ * *F_OURS. Returns the rays validated, or -1 after a message naming NAME and
+ * STRUCTURE. */
+long havran_measure_pair(const bsp_accel *his, const bsp_accel *ours, const bsp_accel *naive,
+                         const char *name, const char *structure, int threads,
+                         havran_figures *f_his, havran_figures *f_ours);
 /* A bench of his tables: its command line (USAGE, MODE_FLAG, HELP; the
  * operands his scenes, --threads, --csv, --quiet), the CSV's header line,
  * the Markdown table's header (its two lines), and EACH, called for every

@@ -104,10 +104,8 @@ static int grids_of_scene(const char *bare, const char *name, const bsp_scene *s
                     h->res[2]);
         bsp_accel *hg = row_grid(scene, h, 1), *dg = row_grid(scene, h, 0);
         havran_figures f, fd;
-        long checked = havran_measure(hg, naive, name, "grid", run->threads, &f);
-        long checked_d =
-            checked < 0 ? -1 : havran_measure(dg, naive, name, "default grid", run->threads, &fd);
-        if (checked >= 0 && checked_d >= 0) {
+        long checked = havran_measure_pair(hg, dg, naive, name, "grid", run->threads, &f, &fd);
+        if (checked >= 0) {
             bsp_tree_stats st;
             bsp_accel_tree_stats(hg, &st);
             printf("| %s | %d x %d x %d | %llu / %lu | %llu / %lu | %.2f / %.2f | %.2f / %.2f "
@@ -123,11 +121,11 @@ static int grids_of_scene(const char *bare, const char *name, const bsp_scene *s
                         h->scene, h->res[0], h->res[1], h->res[2], (unsigned long long)st.leaves,
                         (unsigned long long)st.empty_leaves, h->nev,
                         (unsigned long long)st.references, h->noiv, f.nit, h->nit, f.nts, h->nts,
-                        f.neets, h->neets, fd.nit, checked + checked_d);
+                        f.neets, h->neets, fd.nit, checked);
         }
         bsp_accel_destroy(hg);
         bsp_accel_destroy(dg);
-        if (checked < 0 || checked_d < 0)
+        if (checked < 0)
             return EXIT_INPUT;
     }
     return 0;

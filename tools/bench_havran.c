@@ -56,8 +56,9 @@ int havran_each_scene(const bench_cmdline *cl, havran_scene_fn fn, void *ctx)
     return rc;
 }
 
-long havran_measure(const bsp_accel *accel, const bsp_accel *naive, const char *name,
-                    const char *structure, int threads, havran_figures *f)
+/* One structure of havran_measure_pair. */
+static long measure_one(const bsp_accel *accel, const bsp_accel *naive, const char *name,
+                        const char *structure, int threads, havran_figures *f)
 {
     char what[256];
     long checked = bench_validate(accel, naive, bsp_accel_scene(accel), 2000, what, sizeof what);
@@ -93,6 +94,19 @@ long havran_measure(const bsp_accel *accel, const bsp_accel *naive, const char *
     f->nets = ets * per;
     f->neets = eets * per;
     return checked;
+}
+
+long havran_measure_pair(const bsp_accel *his, const bsp_accel *ours, const bsp_accel *naive,
+                         const char *name, const char *structure, int threads,
+                         havran_figures *f_his, havran_figures *f_ours)
+{
+    long a = measure_one(his, naive, name, structure, threads, f_his);
+    if (a < 0)
+        return -1;
+    char what[96];
+    snprintf(what, sizeof what, "%s (bspray's variant)", structure);
+    long b = measure_one(ours, naive, name, what, threads, f_ours);
+    return b < 0 ? -1 : a + b;
 }
 
 int havran_bench_main(int argc, char **argv, const havran_bench *b)

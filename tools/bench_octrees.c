@@ -112,11 +112,9 @@ static int octrees_of_scene(const char *bare, const char *name, const bsp_scene 
             fprintf(stderr, "%s: %s: octree of depth %d\n", prog, name, h->depth);
         bsp_accel *plain = row_octree(scene, h, 0), *mb = row_octree(scene, h, 1);
         havran_figures f, fm;
-        long checked = havran_measure(plain, naive, name, "octree", run->threads, &f);
-        long checked_m = checked < 0 ? -1
-                                     : havran_measure(mb, naive, name, "octree with mailboxes",
-                                                      run->threads, &fm);
-        if (checked >= 0 && checked_m >= 0) {
+        long checked =
+            havran_measure_pair(plain, mb, naive, name, "octree", run->threads, &f, &fm);
+        if (checked >= 0) {
             bsp_tree_stats st;
             bsp_accel_tree_stats(plain, &st);
             printf("| %s | %d | %llu / %lu | %llu / %lu | %llu / %lu | %llu / %lu | %.2f / %.2f "
@@ -135,11 +133,11 @@ static int octrees_of_scene(const char *bare, const char *name, const bsp_scene 
                         (unsigned long long)st.leaves, h->nv,
                         (unsigned long long)st.empty_leaves, h->nev,
                         (unsigned long long)st.references, h->noiv, f.nit, h->nit, f.nts, h->nts,
-                        f.nets, h->nets, f.neets, h->neets, fm.nit, checked + checked_m);
+                        f.nets, h->nets, f.neets, h->neets, fm.nit, checked);
         }
         bsp_accel_destroy(plain);
         bsp_accel_destroy(mb);
-        if (checked < 0 || checked_m < 0)
+        if (checked < 0)
             return EXIT_INPUT;
     }
     return 0;
