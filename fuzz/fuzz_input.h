@@ -1,8 +1,10 @@
 /*
  * fuzz_input.h — what the fuzz targets share: an input is one format byte
  * and a scene file. The byte's value modulo 3 picks the reader (NFF, OBJ,
- * PLY), its value divided by 3 picks the structure the target compares with
- * the naive method (sah, kaplan, sah-per).
+ * PLY), its value divided by 3 (modulo 5) the structure the target compares
+ * with the naive method (sah, kaplan, sah-per, grid, octree), and for the
+ * octree its value divided by 15 (modulo 2) where the nodes are cut (the
+ * centre, the cost estimate).
  */
 #ifndef BSPRAY_FUZZ_INPUT_H
 #define BSPRAY_FUZZ_INPUT_H
@@ -19,8 +21,10 @@
 #define FUZZ_MAX_PRIMS 3000
 
 /* The scene of input D[0..N) (NULL when the reader refuses it, which must
- * come with a message) and the kind of structure to compare. */
-static inline bsp_scene *fuzz_scene(const uint8_t *d, size_t n, bsp_accel_kind *kind)
+ * come with a message), the kind of structure to compare and, for an
+ * octree, its split. */
+static inline bsp_scene *fuzz_scene(const uint8_t *d, size_t n, bsp_accel_kind *kind,
+                                    bsp_octree_split *split)
 {
     if (n < 1)
         return NULL;
@@ -28,6 +32,7 @@ static inline bsp_scene *fuzz_scene(const uint8_t *d, size_t n, bsp_accel_kind *
                                             BSP_ACCEL_GRID, BSP_ACCEL_OCTREE};
     int fmt = d[0] % 3;
     *kind = kinds[(d[0] / 3) % 5];
+    *split = (d[0] / 15) % 2 ? BSP_OCTREE_COST : BSP_OCTREE_CENTRE;
     const char *buf = (const char *)d + 1;
     bsp_scene *s = NULL;
     bsp_error err = {0};
@@ -51,6 +56,7 @@ static inline bsp_scene *fuzz_scene(const uint8_t *d, size_t n, bsp_accel_kind *
 /* A scene read from an input, with its structure and the naive method. */
 typedef struct fuzz_case {
     bsp_accel_kind kind;
+    bsp_octree_split split;
     bsp_scene *scene;
     bsp_accel *accel, *naive;
 } fuzz_case;
@@ -59,7 +65,7 @@ typedef struct fuzz_case {
  * (refused, too large, or the structure not built). */
 static inline int fuzz_prepare(const uint8_t *d, size_t n, fuzz_case *c)
 {
-    c->scene = fuzz_scene(d, n, &c->kind);
+    c->scene = fuzz_scene(d, n, &c->kind, &c->split);
     if (!c->scene)
         return 0;
     /* the structure on one thread with a small memory cap (skipped when the
@@ -68,6 +74,7 @@ static inline int fuzz_prepare(const uint8_t *d, size_t n, fuzz_case *c)
     bsp_build_options o, on;
     bsp_build_options_defaults(&o);
     o.kind = c->kind;
+    o.octree_split = c->split;
     o.threads = 1;
     o.max_tree_bytes = (size_t)64 << 20;
     bsp_build_options_defaults(&on);

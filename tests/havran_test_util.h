@@ -42,6 +42,23 @@ static inline havran_test_totals havran_test_sum(const bsp_render_stats *st)
     return t;
 }
 
+/* Renders A as his tables were (the renderer's defaults: 513 x 513 rays of
+ * ray depth 4) and returns the counts summed over the ray classes; ends the
+ * test when the render fails or shoots too few rays for his figures. */
+static inline havran_test_totals havran_test_render(const bsp_accel *a)
+{
+    bsp_render_options o;
+    bsp_render_options_defaults(&o);
+    bsp_image *img = NULL;
+    bsp_render_stats st;
+    bsp_error err;
+    REQUIRE_MSG(bsp_render(a, &o, &img, &st, &err) == BSP_OK, "%s", err.message);
+    bsp_image_destroy(img);
+    havran_test_totals t = havran_test_sum(&st);
+    REQUIRE(t.rays > 1e6);
+    return t;
+}
+
 /* Splits LINE at its commas, in place, into FIELDS[0..MAX); returns how
  * many. */
 static inline int havran_test_csv_fields(char *line, char **fields, int max)

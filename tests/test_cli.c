@@ -908,4 +908,35 @@ TEST(cli_bench_modes_share_their_options)
     CHECK_RUN(cmd, 2, "from 2 to 65536");
     snprintf(cmd, sizeof cmd, "%s bench spd:balls:1 --res 0 2>&1", harness_cli());
     CHECK_RUN(cmd, 2, "from 1 to 65536");
+    /* the grid's and the octree's options: the plain bench's only */
+    snprintf(cmd, sizeof cmd, "%s bench --scaling spd:balls:1 --octree-split cost 2>&1",
+             harness_cli());
+    CHECK_RUN(cmd, 2, "unknown option '--octree-split'");
+}
+
+TEST(cli_bench_names_the_cells_variants)
+{
+    /* the grid listing by bounds and the octree cut by cost are named as
+     * such in the table (and its CSV), so a pasted table says what it is */
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd,
+             "%s bench spd:balls:1 --accel octree,grid --octree-split cost --grid-assign bounds "
+             "--res 9 --validate 200 --repeat 1 --quiet 2>&1",
+             harness_cli());
+    int st;
+    char *out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    CHECK_STR_CONTAINS(out, "| spd:balls:1 | 11 | octree-cost |");
+    CHECK_STR_CONTAINS(out, "| spd:balls:1 | 11 | grid-bounds |");
+    free(out);
+    snprintf(cmd, sizeof cmd,
+             "%s bench spd:balls:1 --accel octree,grid --res 9 --validate 200 --repeat 1 --quiet "
+             "2>&1",
+             harness_cli());
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_STR_CONTAINS(out, "| spd:balls:1 | 11 | octree |");
+    CHECK_STR_CONTAINS(out, "| spd:balls:1 | 11 | grid |");
+    free(out);
 }

@@ -137,16 +137,17 @@ static int quick_skips_view_variant(const bsp_scene *scene, int kind, int mailbo
 }
 
 /* The variants the exactness tests compare with naive: every kd rule, the
- * uniform grid and the octree, with and without mailboxes, sah-mixed's three models among them (sampled
- * without mailboxes, surface and counted with them), each sah-mixed tree
- * kept whatever its check against sah would choose. Fills O[0..n), returns
- * n (at most KD_VARIANTS_MAX). */
-#define KD_VARIANTS_MAX (2 * BSP_ACCEL_KIND_COUNT + 1)
+ * uniform grid and the octree, with and without mailboxes, sah-mixed's three
+ * models among them (sampled without mailboxes, surface and counted with
+ * them), each sah-mixed tree kept whatever its check against sah would
+ * choose, and the octree also cut by its cost estimate (with mailboxes).
+ * Fills O[0..n), returns n (at most KD_VARIANTS_MAX). */
+#define KD_VARIANTS_MAX (2 * BSP_ACCEL_KIND_COUNT + 2)
 static int kd_variants(bsp_build_options *o)
 {
     int n = 0;
     for (int k = BSP_ACCEL_KAPLAN; k < BSP_ACCEL_KIND_COUNT; k++) {
-        int nv = k == BSP_ACCEL_SAH_MIXED ? 3 : 2;
+        int nv = k == BSP_ACCEL_SAH_MIXED || k == BSP_ACCEL_OCTREE ? 3 : 2;
         for (int v = 0; v < nv; v++) {
             bsp_build_options_defaults(&o[n]);
             o[n].kind = (bsp_accel_kind)k;
@@ -160,6 +161,7 @@ static int kd_variants(bsp_build_options *o)
             o[n].mixed_check = 0;
             o[n].grid_assign_bounds = v == 0; /* the grid: Havran's assignment without
                                                  mailboxes, the clipped one with */
+            o[n].octree_split = v == 2 ? BSP_OCTREE_COST : BSP_OCTREE_CENTRE;
             n++;
         }
     }

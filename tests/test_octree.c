@@ -1,10 +1,11 @@
 /*
- * test_octree.c — the octree of centre subdivision (`--accel octree`) beyond
- * the exactness tests it shares with the kd-trees (test_kdtree.c): its shape
- * (every octree node has eight children, three kd levels each; the limits
- * hold), its default depth, its refusals, and its figures against Havran's
- * octree statistics (../shared/reference/havran_stats_octrees.txt, his
- * Octree84-C; the figures are written here, so the tests run without
+ * test_octree.c — the octree (`--accel octree`) beyond the exactness tests it
+ * shares with the kd-trees (test_kdtree.c): its shape (every octree node has
+ * eight children, three kd levels each; the limits hold), its default depth,
+ * its refusals, the planes of the adaptive octree (`--octree-split cost`) on
+ * a scene computed by hand, and its figures against Havran's octree
+ * statistics (../shared/reference/havran_stats_octrees.txt, his Octree84-C
+ * and Octree84-A; the figures are written here, so the tests run without
  * ../shared): the nodes, leaves and references on the SPD databases
  * generated in code, and on balls the cells a ray traverses in a 513 x 513
  * depth-4 render; and `bspray bench --octrees`, which prints that
@@ -21,19 +22,27 @@
 #include "harness.h"
 #include "havran_test_util.h"
 
-/* The octree of depth DEPTH (0: the default) over S, checked. */
-static bsp_accel *octree_of(const bsp_scene *s, int depth, int mailbox)
+/* The octree of depth DEPTH (0: the default) over S, cut by SPLIT, checked. */
+static bsp_accel *octree_split_of(const bsp_scene *s, int depth, int mailbox,
+                                  bsp_octree_split split)
 {
     bsp_build_options o;
     bsp_build_options_defaults(&o);
     o.kind = BSP_ACCEL_OCTREE;
     o.max_depth = depth;
     o.mailbox = mailbox;
+    o.octree_split = split;
     bsp_accel *a = NULL;
     bsp_error err;
     REQUIRE_MSG(bsp_accel_build(s, &o, &a, &err) == BSP_OK, "%s", err.message);
     CHECK_MSG(bsp_accel_check(a, &err) == BSP_OK, "%s", err.message);
     return a;
+}
+
+/* The octree of centre subdivision. */
+static bsp_accel *octree_of(const bsp_scene *s, int depth, int mailbox)
+{
+    return octree_split_of(s, depth, mailbox, BSP_OCTREE_CENTRE);
 }
 
 typedef struct shape_walk {
@@ -56,15 +65,16 @@ static int shape_visit(const bsp_cell_info *c, void *ctx)
 TEST(octree_nodes_have_eight_children_and_keep_the_limits)
 {
     const char *scenes[] = {"spd:balls", "spd:tetra", "spd:gears", "spd:tree"};
-    for (int i = 0; i < 4; i++) {
-        bsp_scene *s = havran_test_scene(scenes[i]);
+    for (int i = 0; i < 8; i++) {
+        bsp_scene *s = havran_test_scene(scenes[i % 4]);
+        bsp_octree_split split = i < 4 ? BSP_OCTREE_CENTRE : BSP_OCTREE_COST;
         for (int depth = 2; depth <= 5; depth++) {
-            bsp_accel *a = octree_of(s, depth, 1);
+            bsp_accel *a = octree_split_of(s, depth, 1, split);
             bsp_tree_stats st;
             bsp_accel_tree_stats(a, &st);
             /* each octree node: 7 kd interior nodes and 8 children */
             CHECK_MSG(st.leaves == 7 * st.interior_nodes + 1, "%s depth %d: N_IN %llu, N_V %llu",
-                      scenes[i], depth, (unsigned long long)st.interior_nodes,
+                      scenes[i % 4], depth, (unsigned long long)st.interior_nodes,
                       (unsigned long long)st.leaves);
             CHECK(st.max_leaf_depth <= depth);
             shape_walk w = {depth, 0, 0, 0};
@@ -74,7 +84,7 @@ TEST(octree_nodes_have_eight_children_and_keep_the_limits)
             CHECK_MSG(w.off_level == 0 && w.over_full == 0,
                       "%s depth %d: %llu leaves between octree levels, %llu over-full leaves "
                       "above the limit",
-                      scenes[i], depth, (unsigned long long)w.off_level,
+                      scenes[i % 4], depth, (unsigned long long)w.off_level,
                       (unsigned long long)w.over_full);
             bsp_accel_destroy(a);
         }
@@ -142,6 +152,88 @@ TEST(octree_refuses_bad_options_and_saving)
     bsp_scene_destroy(s);
 }
 
+/* The interior nodes of the first two octree levels: depth, axis, plane,
+ * and the cell's low corner. */
+typedef struct plane_walk {
+    int n;
+    struct {
+        int depth;
+        unsigned axis;
+        double split;
+        bsp_vec3 lo, hi;
+    } node[80];
+} plane_walk;
+
+static int plane_visit(const bsp_cell_info *c, void *ctx)
+{
+    plane_walk *w = ctx;
+    if (!c->is_leaf && w->n < 80) {
+        w->node[w->n].depth = c->depth;
+        w->node[w->n].axis = c->axis;
+        w->node[w->n].split = c->split;
+        w->node[w->n].lo = c->box.lo;
+        w->node[w->n].hi = c->box.hi;
+        w->n++;
+    }
+    return 1;
+}
+
+TEST(octree_cost_split_takes_the_least_of_havrans_estimate)
+{
+    /* Four spheres on the x axis: radius 0.5 at x = 0, 1 and 9, radius 0.4
+     * at x = 2. The root box is 10 x 1 x 1 (x from -0.5 to 9.5; the padding
+     * aside). In x its centre is 4.5 and the median of the spheres' centres
+     * (the middle one of 0, 1, 2, 9: index 2) is 2; the candidates are
+     * 4.5 - 0.25 i, i = 0..9. From 4.5 down to 2.5 (i = 8) three spheres lie
+     * left and one right, so with t = p + 0.5 the estimate is
+     * 3 (t 2 (1 + 1) + 1) + 1 ((10 - t) 2 (1 + 1) + 1) = 8 t + 44, least at
+     * p = 2.5 (68); at p = 2.25 (i = 9) the sphere at 2 is cut:
+     * 3 (4 2.75 + 1) + 2 (4 7.25 + 1) = 96. So the plane is x = 2.5, where
+     * the octree of centre subdivision cuts at 4.5. In y and z every centre
+     * is 0, the box's centre too: the planes are y = 0 and z = 0. One level
+     * down, the octant x < 2.5, y < 0, z < 0 holds the three spheres at 0,
+     * 1, 2; its centre in x is 1 (up to the padding) and so is the median of
+     * their centres: it is cut at x = 1. */
+    static const char four[] = "s 0 0 0 0.5\ns 1 0 0 0.5\ns 2 0 0 0.4\ns 9 0 0 0.5\n";
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load_nff_memory(four, sizeof four - 1, "four.nff", &s, &err) == BSP_OK);
+    for (int v = 0; v < 2; v++) {
+        bsp_octree_split split = v ? BSP_OCTREE_COST : BSP_OCTREE_CENTRE;
+        bsp_accel *a = octree_split_of(s, 2, 1, split);
+        plane_walk w;
+        memset(&w, 0, sizeof w);
+        REQUIRE(bsp_accel_visit_cells(a, 5, plane_visit, &w, &err) == BSP_OK);
+        REQUIRE(w.n >= 8);
+        /* the root's x plane, then y in both halves, z in the four quarters */
+        CHECK(w.node[0].depth == 0 && w.node[0].axis == 0);
+        CHECK_MSG(fabs(w.node[0].split - (v ? 2.5 : 4.5)) < 1e-9, "%s: root plane x = %.9g",
+                  v ? "cost" : "centre", w.node[0].split);
+        int ys = 0, zs = 0, low_octant = 0;
+        for (int i = 1; i < w.n; i++) {
+            if (w.node[i].depth == 1) {
+                CHECK(w.node[i].axis == 1 && fabs(w.node[i].split) < 1e-9);
+                ys++;
+            } else if (w.node[i].depth == 2) {
+                CHECK(w.node[i].axis == 2 && fabs(w.node[i].split) < 1e-9);
+                zs++;
+            } else if (w.node[i].depth == 3 && w.node[i].lo.x < -0.4 && w.node[i].hi.y <= 0.0 &&
+                       w.node[i].hi.z <= 0.0) {
+                /* the octant at the low corner: cut at x = 1 (by cost) or at
+                 * the centre of -0.5..4.5 (by centre) */
+                CHECK(w.node[i].axis == 0);
+                CHECK_MSG(fabs(w.node[i].split - (v ? 1.0 : 2.0)) < 1e-5,
+                          "%s: low octant's plane x = %.9g", v ? "cost" : "centre",
+                          w.node[i].split);
+                low_octant++;
+            }
+        }
+        CHECK(ys == 2 && zs == 4 && low_octant == 1);
+        bsp_accel_destroy(a);
+    }
+    bsp_scene_destroy(s);
+}
+
 /* Havran's Octree84-C figures: N_IN, N_V, N_EV, N_OIV. */
 typedef struct octree_figures {
     const char *scene;
@@ -149,63 +241,92 @@ typedef struct octree_figures {
     unsigned long nin, nv, nev, noiv;
 } octree_figures;
 
-TEST(octree_matches_havrans_nodes_and_references)
+/* Builds each of HIS[0..N) (without mailboxes, cut by SPLIT) and checks
+ * its nodes, empty leaves and references against his within the shares
+ * TIN, TEV and TOIV (a negative share: not checked; with N_EV 0 his, ours
+ * must be 0 too when TEV is checked). */
+static void check_havran_octrees(const octree_figures *his, size_t n, bsp_octree_split split,
+                                 double tin, double tev, double toiv)
 {
-    /* where his octree and ours cut the same box at the same centres and
-     * list by the same bounds: lattice to the cell; balls and tree up to
-     * the padding of a primitive's bounds (ours lists a primitive touching
-     * a plane on both sides). tetra, whose faces lie on the centre planes,
-     * and gears' polygons differ (docs/octree.md). */
-    static const octree_figures his[] = {
-        {"spd:lattice", 4, 585, 4096, 0, 22112},  {"spd:lattice", 5, 4681, 32768, 7744, 49600},
-        {"spd:balls", 4, 57, 400, 300, 9171},     {"spd:balls", 5, 117, 820, 570, 10946},
-        {"spd:balls", 7, 1108, 7757, 2905, 27288}, {"spd:tree", 7, 352, 2465, 1801, 13725},
-        {"spd:rings", 6, 6925, 48476, 10281, 133929},
-    };
-    for (size_t i = 0; i < sizeof his / sizeof *his; i++) {
+    for (size_t i = 0; i < n; i++) {
         const octree_figures *h = &his[i];
         bsp_scene *s = havran_test_scene(h->scene);
-        bsp_accel *a = octree_of(s, h->depth, 0);
+        bsp_accel *a = octree_split_of(s, h->depth, 0, split);
         bsp_tree_stats st;
         bsp_accel_tree_stats(a, &st);
         double din = (double)st.interior_nodes / (double)h->nin - 1.0;
         double dev = h->nev ? (double)st.empty_leaves / (double)h->nev - 1.0
                             : (double)st.empty_leaves;
         double doiv = (double)st.references / (double)h->noiv - 1.0;
-        CHECK_MSG(fabs(din) <= 0.01 && fabs(dev) <= 0.03 && fabs(doiv) <= 0.07,
-                  "%s depth %d: N_IN %llu / %lu, N_EV %llu / %lu, N_OIV %llu / %lu", h->scene,
-                  h->depth, (unsigned long long)st.interior_nodes, h->nin,
+        CHECK_MSG(fabs(din) <= tin && (tev < 0 || fabs(dev) <= tev) && fabs(doiv) <= toiv,
+                  "%s depth %d (%s): N_IN %llu / %lu, N_EV %llu / %lu, N_OIV %llu / %lu",
+                  h->scene, h->depth, split == BSP_OCTREE_COST ? "cost" : "centre",
+                  (unsigned long long)st.interior_nodes, h->nin,
                   (unsigned long long)st.empty_leaves, h->nev,
                   (unsigned long long)st.references, h->noiv);
-        if (!strcmp(h->scene, "spd:lattice") || (h->depth == 4 && !strcmp(h->scene, "spd:balls")))
-            CHECK_MSG(st.interior_nodes == h->nin && st.leaves == h->nv &&
-                          st.empty_leaves == h->nev,
-                      "%s depth %d: not his octree to the node", h->scene, h->depth);
         bsp_accel_destroy(a);
         bsp_scene_destroy(s);
     }
 }
 
+TEST(octree_matches_havrans_nodes_and_references)
+{
+    /* where his octree and ours cut the same box at the same centres and
+     * list by the same bounds: lattice, and balls at depth 4, to the cell
+     * (N_IN and N_EV his, so N_V too); balls and tree deeper, and rings,
+     * up to the padding of a primitive's bounds (ours lists a primitive
+     * touching a plane on both sides). tetra, whose faces lie on the centre
+     * planes, and gears' polygons differ (docs/octree.md). */
+    static const octree_figures exact[] = {
+        {"spd:lattice", 4, 585, 4096, 0, 22112},
+        {"spd:lattice", 5, 4681, 32768, 7744, 49600},
+        {"spd:balls", 4, 57, 400, 300, 9171},
+    };
+    static const octree_figures near[] = {
+        {"spd:balls", 5, 117, 820, 570, 10946},    {"spd:balls", 7, 1108, 7757, 2905, 27288},
+        {"spd:tree", 7, 352, 2465, 1801, 13725},   {"spd:rings", 6, 6925, 48476, 10281, 133929},
+    };
+    check_havran_octrees(exact, sizeof exact / sizeof *exact, BSP_OCTREE_CENTRE, 0.0, 0.0, 0.07);
+    check_havran_octrees(near, sizeof near / sizeof *near, BSP_OCTREE_CENTRE, 0.01, 0.03, 0.07);
+}
+
+TEST(octree_cost_split_matches_havrans_adaptive_octrees)
+{
+    /* his Octree84-A (each node cut by his estimate): the nodes within 3 %
+     * and the references within 6 % on the scenes whose centre octrees are
+     * his (his text leaves open which centres and which median; ours are the
+     * choices nearest his over all his scenes: docs/octree.md). The centre
+     * octree has 117 nodes on balls at depth 5, his adaptive one 661. */
+    static const octree_figures his[] = {
+        {"spd:balls", 5, 661, 4628, 1202, 16289},   {"spd:balls", 7, 15283, 106982, 14059, 172506},
+        {"spd:mount", 4, 312, 2185, 866, 21489},    {"spd:mount", 6, 7893, 55252, 14018, 150938},
+        {"spd:tree", 5, 278, 1947, 837, 11352},     {"spd:tree", 6, 1130, 7911, 3511, 17245},
+        {"spd:lattice", 5, 4681, 32768, 7133, 42789},
+    };
+    check_havran_octrees(his, sizeof his / sizeof *his, BSP_OCTREE_COST, 0.03, -1.0, 0.06);
+}
+
 TEST(octree_rays_traverse_havrans_cells_on_balls)
 {
-    /* his depth-5 octree on balls, no mailboxes: N_ETS 15.39 and N_EETS
-     * 9.52 cells per ray of the whole render (the empty cells the kd
-     * traversal skips without a visit are counted, as cells traversed) */
+    /* his depth-5 octrees on balls, no mailboxes, cells per ray of the whole
+     * render (the empty cells the kd traversal skips without a visit are
+     * counted, as cells traversed): Octree84-C N_ETS 15.39 and N_EETS 9.52,
+     * Octree84-A (cut by his estimate) 8.35 and 4.62 */
+    static const struct {
+        bsp_octree_split split;
+        double nets, neets;
+    } his[] = {{BSP_OCTREE_CENTRE, 15.39, 9.52}, {BSP_OCTREE_COST, 8.35, 4.62}};
     bsp_scene *s = havran_test_scene("spd:balls");
-    bsp_accel *a = octree_of(s, 5, 0);
-    bsp_render_options o;
-    bsp_render_options_defaults(&o);
-    bsp_image *img = NULL;
-    bsp_render_stats st;
-    bsp_error err;
-    REQUIRE(bsp_render(a, &o, &img, &st, &err) == BSP_OK);
-    havran_test_totals tot = havran_test_sum(&st);
-    double rays = tot.rays, ets = tot.ets, eets = tot.eets;
-    REQUIRE(rays > 1e6);
-    CHECK_MSG(fabs(ets / rays / 15.39 - 1.0) < 0.02, "N_ETS %.2f, Havran 15.39", ets / rays);
-    CHECK_MSG(fabs(eets / rays / 9.52 - 1.0) < 0.03, "N_EETS %.2f, Havran 9.52", eets / rays);
-    bsp_image_destroy(img);
-    bsp_accel_destroy(a);
+    for (int i = 0; i < 2; i++) {
+        bsp_accel *a = octree_split_of(s, 5, 0, his[i].split);
+        havran_test_totals tot = havran_test_render(a);
+        double rays = tot.rays, ets = tot.ets, eets = tot.eets;
+        CHECK_MSG(fabs(ets / rays / his[i].nets - 1.0) < 0.02, "N_ETS %.2f, Havran %.2f",
+                  ets / rays, his[i].nets);
+        CHECK_MSG(fabs(eets / rays / his[i].neets - 1.0) < 0.03, "N_EETS %.2f, Havran %.2f",
+                  eets / rays, his[i].neets);
+        bsp_accel_destroy(a);
+    }
     bsp_scene_destroy(s);
 }
 
@@ -240,6 +361,30 @@ TEST(cli_bench_octrees_prints_his_figures_beside_ours)
     CHECK(rows == 4 && depth_sum == 4 + 5 + 6 + 7);
     snprintf(cmd, sizeof cmd, "%s bench --octrees spd:shells 2>&1", harness_cli());
     CHECK_RUN(cmd, 2, "not one of Havran's scenes");
+    /* the adaptive octrees beside his Octree84-A: tree's at depth 4 has 73
+     * nodes, his 71 (the centre octree: 53) */
+    snprintf(cmd, sizeof cmd,
+             "%s bench --octrees tree --octree-split cost --quiet --threads 2 --csv %s 2>&1",
+             harness_cli(), csv);
+    int status;
+    char *out = harness_run(cmd, &status);
+    REQUIRE(out);
+    CHECK_EQ_INT(status, 0);
+    CHECK_STR_CONTAINS(out, "Octree84-A: each node cut by his cost estimate");
+    CHECK_STR_CONTAINS(out, "| tree | 4 | 73 / 71 | 512 / 498 |");
+    free(out);
+    f = fopen(csv, "r");
+    REQUIRE(f);
+    rows = 0;
+    while (fgets(line, sizeof line, f)) {
+        char *fields[24];
+        int n = havran_test_csv_fields(line, fields, 24);
+        rows += n == 21 && !strcmp(fields[0], "tree") && !strncmp(fields[20], "cost", 4);
+    }
+    fclose(f);
+    CHECK(rows == 4);
+    snprintf(cmd, sizeof cmd, "%s bench --octrees tree --octree-split middle 2>&1", harness_cli());
+    CHECK_RUN(cmd, 2, "expected centre or cost, got 'middle'");
     remove(csv);
     rmdir(dir);
 }

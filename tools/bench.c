@@ -35,7 +35,7 @@
 static const char bench_usage[] =
     "bspray bench [SCENE...] [--accel LIST] [--res N] [--depth N] [--threads N]\n"
     "                        [--mailbox on|off] [--validate N] [--repeat N] [--csv FILE]\n"
-    "                        [--plot FILE.png] [--quiet]\n"
+    "                        [--plot FILE.png] [--quiet] [--grid-* ...] [--octree-split S]\n"
     "       bspray bench --paper [SCENE...] [--accel LIST] [--csv FILE] ...  (see --paper --help)\n"
     "       bspray bench --scaling [SCENE...] [--accel LIST] [--repeat N] ...  (see --scaling --help)\n"
     "       bspray bench --grids [SCENE...] [--csv FILE] ...  (see --grids --help)\n"
@@ -78,6 +78,8 @@ static void print_help(void)
            "  --costs LIST, --empty-bonus F, --min-saving X, --leaf-budget X, --leaf-budget-min N,\n"
            "                 --budget-cut F|off  the SAH model (see\n"
            "                 'bspray render --help')\n"
+           "  --grid-density D, --grid-res X,Y,Z, --grid-assign clipped|bounds  the grid,\n"
+           "  --octree-split centre|cost  the octree (see 'bspray render --help')\n"
            "\n"
            "Columns: T_B build seconds on 1 and N threads (the same tree); MB structure size (a\n"
            "kd-tree's nodes, leaf lists and leaf-ordered copy of the primitives);\n"
@@ -340,11 +342,17 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     row.scene = scene_name;
     row.nprims = bsp_scene_prim_count(scene);
     row.method = bsp_accel_kind_name(kind);
+    /* the variants of the cells' options that change what the method is */
+    if (kind == BSP_ACCEL_OCTREE && o->cl.cells.octree_split == BSP_OCTREE_COST)
+        row.method = "octree-cost";
+    else if (kind == BSP_ACCEL_GRID && o->cl.cells.grid_assign_bounds)
+        row.method = "grid-bounds";
     bsp_build_options bo;
     bsp_build_options_defaults(&bo);
     bo.kind = kind;
     bo.mailbox = o->cl.mailbox;
     apply_cost_args(&o->cl.costs, &bo);
+    apply_subdivision_args(&o->cl.cells, &bo);
     if (!o->cl.quiet)
         fprintf(stderr, "%s: %s: %s: building\n", prog, scene_name, row.method);
     bo.threads = 1; /* T_B is the single-threaded build */
@@ -569,7 +577,7 @@ int cmd_bench(int argc, char **argv)
     memset(&o, 0, sizeof o);
     bench_cmdline_init(&o.cl,
                        BENCH_TAKES_RENDER | BENCH_TAKES_REPEAT | BENCH_TAKES_COSTS |
-                           BENCH_TAKES_PLOT,
+                           BENCH_TAKES_PLOT | BENCH_TAKES_CELLS,
                        NULL, bench_default_scenes);
     o.cl.nvalidate = 20000;
     /* the default methods: naive, kaplan, sah (the view rules: --accel, or --paper) */

@@ -45,7 +45,8 @@ enum {
     BENCH_TAKES_RENDER = 1, /* --res, --depth, --mailbox, --validate */
     BENCH_TAKES_REPEAT = 2, /* --repeat */
     BENCH_TAKES_COSTS = 4,  /* the SAH cost model (parse_cost_arg) */
-    BENCH_TAKES_PLOT = 8    /* --plot */
+    BENCH_TAKES_PLOT = 8,   /* --plot */
+    BENCH_TAKES_CELLS = 16  /* the grid's and the octree's (parse_subdivision_arg) */
 };
 typedef struct bench_cmdline {
     unsigned takes;
@@ -56,6 +57,7 @@ typedef struct bench_cmdline {
     int repeat, repeat_given;           /* BENCH_TAKES_REPEAT */
     cost_args costs;                    /* BENCH_TAKES_COSTS */
     const char *plot_path;              /* BENCH_TAKES_PLOT */
+    bsp_build_options cells; /* BENCH_TAKES_CELLS (apply_subdivision_args) */
     int threads, quiet;                 /* always: --threads, --quiet (-q) */
     const char *csv_path;               /* always: --csv */
     const char **scenes;                /* the operands (free: bench_free_cmdline) */
@@ -134,18 +136,25 @@ long havran_measure_pair(const bsp_accel *his, const bsp_accel *ours, const bsp_
                          const char *name, const char *structure, int threads,
                          havran_figures *f_his, havran_figures *f_ours);
 /* A bench of his tables: its command line (USAGE, MODE_FLAG, HELP; the
- * operands his scenes, --threads, --csv, --quiet), the CSV's header line,
- * the Markdown table's header (its two lines), and EACH, called for every
- * scene with a havran_run as its context, printing its rows. */
+ * operands his scenes, --threads, --csv, --quiet, and VARIANT_OPTION when
+ * not NULL, which takes one of VARIANT_WORDS and chooses which of his
+ * tables), the CSV's header line, the Markdown table's header (its two
+ * lines), each variant's caption (a line printed above the table; NULL:
+ * none), and EACH, called for every scene with a havran_run as its
+ * context, printing its rows. */
 typedef struct havran_run {
     int threads, quiet;
-    FILE *csv; /* NULL without --csv */
+    FILE *csv;   /* NULL without --csv */
+    int variant; /* the index of the VARIANT_OPTION's word (0 without one) */
 } havran_run;
 typedef struct havran_bench {
     const char *usage, *mode_flag;
     void (*help)(void);
     const char *csv_header, *table_header;
     havran_scene_fn each;
+    const char *variant_option;
+    const char *variant_words[2];
+    const char *variant_captions[2];
 } havran_bench;
 /* Runs B on the command line ARGC, ARGV; returns the exit status. */
 int havran_bench_main(int argc, char **argv, const havran_bench *b);

@@ -51,7 +51,8 @@ static int shared_option(args *a, const char *s, bench_cmdline *c)
     else if ((t & BENCH_TAKES_RENDER) && !strcmp(s, "--validate"))
         c->nvalidate = parse_int(a, s, 0, 100000000);
     else
-        return (t & BENCH_TAKES_COSTS) && parse_cost_arg(a, &c->costs);
+        return ((t & BENCH_TAKES_COSTS) && parse_cost_arg(a, &c->costs)) ||
+               ((t & BENCH_TAKES_CELLS) && parse_subdivision_arg(a, &c->cells));
     return 1;
 }
 
@@ -88,6 +89,7 @@ void bench_cmdline_init(bench_cmdline *c, unsigned takes, const char *mode_flag,
     c->mailbox = 1;
     c->repeat = 3;
     c->threads = default_threads();
+    bsp_build_options_defaults(&c->cells);
 }
 
 int bench_cmdline_ready(bench_cmdline *c, int check_load, FILE **csv)

@@ -141,6 +141,9 @@ int bench_grids(int argc, char **argv)
         "N_TS_havran,N_EETS,N_EETS_havran,N_IT_default_grid,validated_rays",
         "| scene | cells | N_EV ours / his | N_OIV ours / his | N_IT ours / his | N_TS ours / his "
         "| N_EETS ours / his | N_IT, default grid |\n|---|---|---:|---:|---:|---:|---:|---:|",
-        grids_of_scene};
+        grids_of_scene,
+        NULL, /* one table: his uniform grids */
+        {NULL, NULL},
+        {NULL, NULL}};
     return havran_bench_main(argc, argv, &b);
 }

@@ -109,18 +109,39 @@ long havran_measure_pair(const bsp_accel *his, const bsp_accel *ours, const bsp_
     return b < 0 ? -1 : a + b;
 }
 
+/* The command line of havran_bench_main: his scenes, and the bench's
+ * variant option. */
+typedef struct havran_cmdline {
+    bench_cmdline *cl;
+    const havran_bench *b;
+    int variant;
+} havran_cmdline;
+
+static int havran_arg(args *a, const char *s, void *ctx)
+{
+    havran_cmdline *h = ctx;
+    if (h->b->variant_option && !strcmp(s, h->b->variant_option)) {
+        h->variant = parse_one_of_two(a, s, h->b->variant_words[0], h->b->variant_words[1]);
+        return 1;
+    }
+    return havran_scene_arg(a, s, h->cl);
+}
+
 int havran_bench_main(int argc, char **argv, const havran_bench *b)
 {
     args a = {argc, 1, argv, b->usage, NULL};
     bench_cmdline cl;
     bench_cmdline_init(&cl, 0, b->mode_flag, havran_scenes);
-    if (bench_read_cmdline(&a, &cl, havran_scene_arg, &cl, b->help))
+    havran_cmdline h = {&cl, b, 0};
+    if (bench_read_cmdline(&a, &cl, havran_arg, &h, b->help))
         return 0;
-    havran_run run = {cl.threads, cl.quiet, NULL};
+    havran_run run = {cl.threads, cl.quiet, NULL, h.variant};
     if (!bench_cmdline_ready(&cl, 0, &run.csv))
         return EXIT_INPUT;
     if (run.csv)
         fprintf(run.csv, "%s\n", b->csv_header);
+    if (b->variant_captions[run.variant])
+        printf("%s\n\n", b->variant_captions[run.variant]);
     printf("%s\n", b->table_header);
     int rc = havran_each_scene(&cl, b->each, &run);
     if (run.csv && fclose(run.csv) != 0) {

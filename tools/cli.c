@@ -519,15 +519,19 @@ static void parse_grid_res(args *a, const char *opt, int res[3])
     }
 }
 
-#define GRID_ARGS_HELP                                                                             \
+#define SUBDIVISION_ARGS_HELP                                                                             \
     "  --grid-density D   grid: about D cells per primitive, cubic cells over the scene's\n"      \
     "                     box, 0 < D <= 1e6 (default 4; Havran's tables use 1 and 10)\n"         \
     "  --grid-res X,Y,Z   grid: exactly these cells per axis (overrides --grid-density)\n"       \
     "  --grid-assign clipped|bounds  grid: a primitive goes in the cells its part reaches\n"    \
     "                     (clipped, default) or in every cell its bounds overlap (bounds:\n"     \
-    "                     Havran's 1999 grids; see docs/grid.md)\n"
+    "                     Havran's 1999 grids; see docs/grid.md)\n"                        \
+    "  --octree-split centre|cost  octree: cut each node at the centre of its box\n"       \
+    "                     (default) or, on each axis, at the least of a cost estimate\n"   \
+    "                     between the centre and the median of its primitives (the\n"     \
+    "                     adaptive octree of Havran's 1999 statistics; docs/octree.md)\n"
 
-int parse_grid_arg(args *a, bsp_build_options *opts)
+int parse_subdivision_arg(args *a, bsp_build_options *opts)
 {
     const char *s = a->argv[a->i];
     if (!strcmp(s, "--grid-density"))
@@ -537,9 +541,20 @@ int parse_grid_arg(args *a, bsp_build_options *opts)
         opts->grid_assign_bounds = parse_one_of_two(a, s, "clipped", "bounds");
     else if (!strcmp(s, "--grid-res"))
         parse_grid_res(a, s, opts->grid_res);
+    else if (!strcmp(s, "--octree-split"))
+        opts->octree_split =
+            parse_one_of_two(a, s, "centre", "cost") ? BSP_OCTREE_COST : BSP_OCTREE_CENTRE;
     else
         return 0;
     return 1;
+}
+
+void apply_subdivision_args(const bsp_build_options *from, bsp_build_options *to)
+{
+    to->grid_density = from->grid_density;
+    memcpy(to->grid_res, from->grid_res, sizeof to->grid_res);
+    to->grid_assign_bounds = from->grid_assign_bounds;
+    to->octree_split = from->octree_split;
 }
 
 const char build_args_help[] =
@@ -566,7 +581,7 @@ const char build_args_help[] =
     "                     the same for any N\n"
     "  --max-tree-mb N    kd-tree, octree, grid: fail when the nodes (cells) and lists\n"
     "                     need more than N MiB (default: half the machine's memory)\n"
-    GRID_ARGS_HELP COST_ARGS_HELP;
+    SUBDIVISION_ARGS_HELP COST_ARGS_HELP;
 
 int parse_build_arg(args *a, bsp_build_options *opts)
 {
@@ -597,7 +612,7 @@ int parse_build_arg(args *a, bsp_build_options *opts)
                        opts->sah_budget_cut, opts->sah_straddle_twice};
         parse_cost_arg(a, &c);
         apply_cost_args(&c, opts);
-    } else if (parse_grid_arg(a, opts)) {
+    } else if (parse_subdivision_arg(a, opts)) {
         ;
     } else if (!strcmp(s, "--mixed-share")) {
         opts->mixed_primary_share =

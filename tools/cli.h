@@ -137,9 +137,12 @@ void json_real(FILE *f, double x);
  * the leaf budget's cut, and the digest, a string of 16 hex digits (a 64-bit
  * value is not exact as a JSON number), null for the naive method. */
 void tree_stats_json(FILE *f, const char *indent, const bsp_tree_stats *t, bsp_accel_kind kind);
-/* The grid's build options (--grid-density, --grid-res, --grid-assign) at
- * a->argv[a->i] into OPTS: 1 when it was one (its value consumed), else 0. */
-int parse_grid_arg(args *a, bsp_build_options *opts);
+/* The grid's and the octree's build options (--grid-density, --grid-res,
+ * --grid-assign, --octree-split) at a->argv[a->i] into OPTS: 1 when it was
+ * one (its value consumed), else 0. */
+int parse_subdivision_arg(args *a, bsp_build_options *opts);
+/* Copies those options from FROM into TO. */
+void apply_subdivision_args(const bsp_build_options *from, bsp_build_options *to);
 
 /* Whether a build of method K uses bsp_build_options.threads (the sah
  * family): the benchmarks then time it on all threads too. */

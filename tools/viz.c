@@ -66,8 +66,8 @@ static const char viz_help[] =
     "  --costs LIST, --empty-bonus F, --min-saving X, --leaf-budget X, --leaf-budget-min N,\n"
     "                 --budget-cut F|off  the SAH model (see\n"
     "                 'bspray render --help')\n"
-    "  --grid-density D, --grid-res X,Y,Z, --grid-assign clipped|bounds  the grid (see\n"
-    "                 'bspray render --help')\n"
+    "  --grid-density D, --grid-res X,Y,Z, --grid-assign clipped|bounds  the grid,\n"
+    "  --octree-split centre|cost  the octree (see 'bspray render --help')\n"
     "  --eye, --at, --dir, --up X,Y,Z   override the camera; --fov DEG its field of view.\n"
     "                   The sah-per, sah-par and sah-mixed trees are built for this view.\n"
     "\n"
@@ -147,8 +147,8 @@ int cmd_viz(int argc, char **argv)
     draw_color_mode mode = DRAW_COLOR_DEPTH;
     view_args view = {0};
     cost_args costs = {{0}, 0.0, 0.0, 0.0, 0, 0.0, 0};
-    bsp_build_options grid_opts; /* --grid-*: for the rows of method grid */
-    bsp_build_options_defaults(&grid_opts);
+    bsp_build_options subdivision_opts; /* --grid-*, --octree-split: for the grid and octree rows */
+    bsp_build_options_defaults(&subdivision_opts);
     for (; a.i < argc; a.i++) {
         const char *s = argv[a.i];
         if (is_help(s)) {
@@ -183,7 +183,7 @@ int cmd_viz(int argc, char **argv)
         } else if (!strcmp(s, "--quiet") || !strcmp(s, "-q")) {
             quiet = 1;
         } else if (parse_view_arg(&a, &view) || parse_cost_arg(&a, &costs) ||
-                   parse_grid_arg(&a, &grid_opts)) {
+                   parse_subdivision_arg(&a, &subdivision_opts)) {
             continue;
         } else {
             take_operand(&a, &scene_path);
@@ -235,9 +235,7 @@ int cmd_viz(int argc, char **argv)
         bopts.max_depth = rows[r].kind == BSP_ACCEL_OCTREE ? (max_depth + 2) / 3 : max_depth;
         bopts.max_leaf_prims = leaf_size;
         apply_cost_args(&costs, &bopts);
-        bopts.grid_density = grid_opts.grid_density;
-        memcpy(bopts.grid_res, grid_opts.grid_res, sizeof bopts.grid_res);
-        bopts.grid_assign_bounds = grid_opts.grid_assign_bounds;
+        apply_subdivision_args(&subdivision_opts, &bopts);
         rows[r].accel = build_accel(scene, &bopts);
         if (draw_cells_collect(rows[r].accel, &rows[r].cells, &err) != BSP_OK) {
             fprintf(stderr, "%s: %s\n", prog, err.message);

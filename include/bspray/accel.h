@@ -39,10 +39,11 @@ typedef enum bsp_accel_kind {
     BSP_ACCEL_GRID,      /* uniform grid (Fujimoto et al. 1986), traversed by a 3D-DDA
                             (Amanatides & Woo 1987): the classic baseline of Havran's
                             grid statistics; see bsp_build_options.grid_density */
-    BSP_ACCEL_OCTREE,    /* octree of centre subdivision (Glassner 1984), kept as a
-                            kd-tree of three levels per octree node and traversed as
-                            one; primitives listed by their bounds, as in Havran's
-                            1999 octree statistics. max_depth counts octree levels */
+    BSP_ACCEL_OCTREE,    /* octree (Glassner 1984), kept as a kd-tree of three levels
+                            per octree node and traversed as one; primitives listed by
+                            their bounds, as in Havran's 1999 octree statistics; cut
+                            at the centre or by a cost estimate (octree_split).
+                            max_depth counts octree levels */
     BSP_ACCEL_KIND_COUNT
 } bsp_accel_kind;
 
@@ -108,6 +109,18 @@ typedef enum bsp_mixed_model {
        secondary rays that meet each box, counted exactly (docs/modified-sah.md) */
     BSP_MIXED_COUNTED = 2
 } bsp_mixed_model;
+
+/* Where an octree node is cut (bsp_build_options.octree_split). */
+typedef enum bsp_octree_split {
+    /* at the centre of its box on each axis: eight equal octants (Glassner
+       1984; Havran's Octree84-C) */
+    BSP_OCTREE_CENTRE = 0,
+    /* on each axis at the least of a cost estimate over ten positions from the
+       box's centre to the median of its primitives' centres (Whang et al.'s
+       Octree-R 1995 after MacDonald and Booth 1990; Havran's Octree84-A;
+       docs/octree.md) */
+    BSP_OCTREE_COST = 1
+} bsp_octree_split;
 
 /* Build options; always start from bsp_build_options_defaults(). */
 typedef struct bsp_build_options {
@@ -178,6 +191,8 @@ typedef struct bsp_build_options {
                               reaches (clipped to each cell, as the kd-trees' perfect
                               splits); 1 in every cell its bounds overlap (padded), as
                               Havran's 1999 grids did */
+    bsp_octree_split octree_split; /* octree: where a node is cut (default
+                              BSP_OCTREE_CENTRE) */
     void (*progress)(double done, void *ctx); /* NULL (default), or called now and then on
                               the thread that calls bsp_accel_build with the share of the
                               tree built, in [0, 1], and with 1 when the build is done.

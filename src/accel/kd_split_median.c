@@ -6,7 +6,10 @@
  * 1999 octree statistics built it), which is the same tree decided only every
  * third level: an octree node that is not a leaf is cut in x, both halves in
  * y and the four quarters in z, so its eight octants are all made (empty ones
- * as empty leaves), and each octant is an octree node one level down.
+ * as empty leaves), and each octant is an octree node one level down. The
+ * adaptive octree (Octree-R, Havran's Octree84-A) is the same tree with its
+ * three planes chosen at the octree node by a cost estimate (octree_planes);
+ * the two lower levels of the group cut at the planes chosen above them.
  *
  * Primitive lists live in one growable scratch stack: a node's list is at
  * [base, base + n), its children's lists are written at the first free index
@@ -24,8 +27,90 @@ typedef struct median_build {
     uint32_t *scratch;
     size_t cap;
     int group; /* levels per decision: 1 Kaplan, 3 the octree */
+    int by_cost; /* the octree: planes by octree_planes, not at the centre */
+    double *centres; /* by_cost: scratch for the primitives' centres (median) */
+    size_t centres_cap;
     bsp_error *err;
 } median_build;
+
+/* Havran's 1999 adaptive octrees (Octree84-A): the candidate planes per axis,
+ * the box's centre and the positions a tenth, two tenths, ... nine tenths of
+ * the way to the median of its primitives (octree_planes). */
+#define OCTREE_COST_CANDIDATES 10
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The estimate Havran states for his adaptive octrees (after MacDonald and
+ * Booth, and Whang et al.'s Octree-R): a plane at T from the low face of a
+ * box A x B x C (A along the axis), with LEFT primitives wholly below it,
+ * RIGHT wholly above and CUT across it, costs (LEFT + CUT)(2T(B + C) + BC) +
+ * (RIGHT + CUT)(2(A - T)(B + C) + BC). Taken as he gives it. */
+static double octree_plane_cost(double a, double b, double c, double t, size_t left,
+                                size_t right, size_t cut)
+{
+    return (double)(left + cut) * (t * 2.0 * (b + c) + b * c) +
+           (double)(right + cut) * ((a - t) * 2.0 * (b + c) + b * c);
+}
+
+/* The octree node's three planes into PLANES: on each axis the least-cost
+ * of OCTREE_COST_CANDIDATES positions from the centre of BOX (included)
+ * towards the median of the primitives LIST[0..N) (excluded), the one
+ * nearest the centre on a tie. The median is the middle one (index N/2,
+ * ascending) of the centres of the primitives' padded bounds clipped to
+ * BOX. Havran's text leaves these three choices open (which centres, which
+ * median, whether the ends are candidates); these are the ones whose trees
+ * come nearest his over his scenes (docs/octree.md). A primitive counts left
+ * when its padded bounds start below the plane and right when they end above
+ * it, as the lists are then split. A candidate whose float is not strictly
+ * inside the box is passed over; the centre is the fallback. Returns 0 when
+ * out of memory. */
+static int octree_planes(median_build *b, bsp_box box, const uint32_t *list, size_t n,
+                         double planes[3])
+{
+    if (!GROW_ARRAY(b->centres, b->centres_cap, n))
+        return 0;
+    for (unsigned k = 0; k < 3; k++) {
+        double lo = box.lo.v[k], hi = box.hi.v[k];
+        double centre = 0.5 * (lo + hi);
+        for (size_t j = 0; j < n; j++) {
+            const bsp_box *p = &b->pbox[list[j]];
+            double plo = p->lo.v[k] > lo ? p->lo.v[k] : lo, phi = p->hi.v[k] < hi ? p->hi.v[k] : hi;
+            b->centres[j] = 0.5 * (plo + phi);
+        }
+        qsort(b->centres, n, sizeof *b->centres, cmp_double);
+        double median = b->centres[n / 2];
+        double a = hi - lo, e1 = box.hi.v[(k + 1) % 3] - box.lo.v[(k + 1) % 3],
+               e2 = box.hi.v[(k + 2) % 3] - box.lo.v[(k + 2) % 3];
+        double best_cost = 0.0;
+        planes[k] = centre;
+        int found = 0;
+        for (int i = 0; i < OCTREE_COST_CANDIDATES; i++) {
+            double p = centre + (median - centre) * i / OCTREE_COST_CANDIDATES;
+            double s = (double)(float)p;
+            if (!(s > lo && s < hi))
+                continue;
+            size_t left = 0, right = 0, cut = 0;
+            for (size_t j = 0; j < n; j++) {
+                const bsp_box *q = &b->pbox[list[j]];
+                int l = q->lo.v[k] < s, r = q->hi.v[k] > s;
+                left += l && !r;
+                right += r && !l;
+                cut += l && r;
+            }
+            double cost = octree_plane_cost(a, e1, e2, s - lo, left, right, cut);
+            if (!found || cost < best_cost) {
+                best_cost = cost;
+                planes[k] = s;
+                found = 1;
+            }
+        }
+    }
+    return 1;
+}
 
 static int reserve(median_build *b, size_t need)
 {
@@ -37,20 +122,29 @@ static bsp_status oom(median_build *b)
     return kd_build_failed(b->t, b->err);
 }
 
-/* The node's list is scratch[base, base + n); scratch[top, ...) is free. */
+/* The node's list is scratch[base, base + n); scratch[top, ...) is free.
+ * PLANES: with by_cost, the planes its octree node chose (read at the two
+ * lower levels of the group; set here at the first). */
 static bsp_status build_node(median_build *b, uint32_t node, bsp_box box, size_t base, size_t n,
-                             size_t top, int depth)
+                             size_t top, int depth, double planes[3])
 {
     kd_tree *t = b->t;
     unsigned axis = (unsigned)(depth % 3);
     double lo = box.lo.v[axis], hi = box.hi.v[axis];
-    float split = (float)(0.5 * (lo + hi));
-    double s = (double)split;
     /* a leaf by the limits (decided at a node of the group's first level), or
      * when the box is too thin for a float plane */
     int decides = depth % b->group == 0;
-    if ((decides && (n <= (size_t)t->max_leaf_prims || depth >= t->max_depth)) ||
-        !(s > lo && s < hi))
+    if (decides && (n <= (size_t)t->max_leaf_prims || depth >= t->max_depth))
+        return kd_make_leaf(t, node, b->scratch + base, n) ? BSP_OK : oom(b);
+    double own[3];
+    if (b->by_cost && decides) {
+        if (!octree_planes(b, box, b->scratch + base, n, own))
+            return oom(b);
+        planes = own;
+    }
+    float split = b->by_cost ? (float)planes[axis] : (float)(0.5 * (lo + hi));
+    double s = (double)split;
+    if (!(s > lo && s < hi))
         return kd_make_leaf(t, node, b->scratch + base, n) ? BSP_OK : oom(b);
 
     if (!reserve(b, top + 2 * n))
@@ -74,16 +168,17 @@ static bsp_status build_node(median_build *b, uint32_t node, bsp_box box, size_t
     bsp_box lb = box, rb = box;
     lb.hi.v[axis] = rb.lo.v[axis] = s;
     /* the left subtree works above both lists; then the right one may reuse it */
-    bsp_status st = build_node(b, child, lb, left, nl, right + nr, depth + 1);
+    bsp_status st = build_node(b, child, lb, left, nl, right + nr, depth + 1, planes);
     if (st == BSP_OK)
-        st = build_node(b, child + 1, rb, right, nr, right + nr, depth + 1);
+        st = build_node(b, child + 1, rb, right, nr, right + nr, depth + 1, planes);
     return st;
 }
 
-static bsp_status build_median(kd_tree *t, const bsp_scene *scene, int group, bsp_error *err)
+static bsp_status build_median(kd_tree *t, const bsp_scene *scene, int group, int by_cost,
+                               bsp_error *err)
 {
     size_t np = bsp_scene_prim_count(scene);
-    median_build b = {t, NULL, NULL, 0, group, err};
+    median_build b = {t, NULL, NULL, 0, group, by_cost, NULL, 0, err};
     b.pbox = malloc((np ? np : 1) * sizeof *b.pbox);
     b.cap = 4 * np + 64;
     b.scratch = malloc(b.cap * sizeof *b.scratch);
@@ -98,9 +193,11 @@ static bsp_status build_median(kd_tree *t, const bsp_scene *scene, int group, bs
             b.pbox[p] = kd_prim_box(t, scene, p);
             b.scratch[n++] = p;
         }
+        double planes[3] = {0.0, 0.0, 0.0};
         if (n > 0)
-            st = build_node(&b, 0, t->box, 0, n, n, 0);
+            st = build_node(&b, 0, t->box, 0, n, n, 0, planes);
     }
+    free(b.centres);
     free(b.pbox);
     free(b.scratch);
     return st;
@@ -108,13 +205,14 @@ static bsp_status build_median(kd_tree *t, const bsp_scene *scene, int group, bs
 
 bsp_status kd_build_median(kd_tree *t, const bsp_scene *scene, bsp_error *err)
 {
-    return build_median(t, scene, 1, err);
+    return build_median(t, scene, 1, 0, err);
 }
 
-bsp_status kd_build_octree(kd_tree *t, const bsp_scene *scene, bsp_error *err)
+bsp_status kd_build_octree(kd_tree *t, const bsp_scene *scene, bsp_octree_split split,
+                           bsp_error *err)
 {
     t->octree = 1;
-    return build_median(t, scene, 3, err);
+    return build_median(t, scene, 3, split == BSP_OCTREE_COST, err);
 }
 
 int kd_octree_default_depth(size_t n)

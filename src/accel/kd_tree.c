@@ -510,6 +510,9 @@ bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
     if (o->max_leaf_prims < 1)
         return error_set(err, BSP_ERR_INVALID, NULL, 0,
                          "kd-tree leaf size %d must be at least 1", o->max_leaf_prims);
+    if (octree && o->octree_split != BSP_OCTREE_CENTRE && o->octree_split != BSP_OCTREE_COST)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "octree split %d is not one of %d, %d",
+                         (int)o->octree_split, BSP_OCTREE_CENTRE, BSP_OCTREE_COST);
     kd_tree *t = malloc(sizeof *t);
     /* an octree level is three kd levels */
     if (!t || !kd_tree_init(t, a->scene, octree ? 3 * o->max_depth : o->max_depth,
@@ -526,7 +529,7 @@ bsp_status kd_accel_build(bsp_accel *a, bsp_error *err)
         st = kd_build_median(t, a->scene, err);
         break;
     case BSP_ACCEL_OCTREE:
-        st = kd_build_octree(t, a->scene, err);
+        st = kd_build_octree(t, a->scene, o->octree_split, err);
         break;
     case BSP_ACCEL_SAH:
         st = kd_build_sah(t, a->scene, o, err);

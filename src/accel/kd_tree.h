@@ -174,10 +174,12 @@ HIDDEN bsp_box kd_prim_box(const kd_tree *t, const bsp_scene *scene, uint32_t pr
 
 /* Kaplan's rule: spatial median, axes in turn. Fills T (already set up). */
 HIDDEN bsp_status kd_build_median(kd_tree *t, const bsp_scene *scene, bsp_error *err);
-/* The octree of centre subdivision as a kd-tree: three levels (x, y, z at
- * the centre) per octree node, the limits decided at every third level
- * (T->max_depth is then three times the octree's depth). Sets T->octree. */
-HIDDEN bsp_status kd_build_octree(kd_tree *t, const bsp_scene *scene, bsp_error *err);
+/* The octree as a kd-tree: three levels (x, y, z at the node's planes: its
+ * centre, or with BSP_OCTREE_COST the planes of the cost estimate) per octree
+ * node, the limits decided at every third level (T->max_depth is then three
+ * times the octree's depth). Sets T->octree. */
+HIDDEN bsp_status kd_build_octree(kd_tree *t, const bsp_scene *scene, bsp_octree_split split,
+                                  bsp_error *err);
 /* The octree's default depth for N primitives (docs/octree.md). */
 HIDDEN int kd_octree_default_depth(size_t n);
 /* Surface area heuristic, exact O(N log N) event build with perfect splits
