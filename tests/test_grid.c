@@ -314,7 +314,7 @@ TEST(cli_viz_draws_a_grid_of_the_cells_asked_for)
     snprintf(cmd, sizeof cmd,
              "%s viz spd:tetra --accel grid --grid-res 8,8,8 --size 64 -o %s 2>&1",
              harness_cli(), png);
-    CHECK_RUN(cmd, 0, "grid        512 leaves");
+    CHECK_RUN(cmd, 0, "grid          512 leaves");
     FILE *f = fopen(png, "rb");
     CHECK(f != NULL);
     if (f)

@@ -341,18 +341,13 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     memset(&row, 0, sizeof row);
     row.scene = scene_name;
     row.nprims = bsp_scene_prim_count(scene);
-    row.method = bsp_accel_kind_name(kind);
-    /* the variants of the cells' options that change what the method is */
-    if (kind == BSP_ACCEL_OCTREE && o->cl.cells.octree_split == BSP_OCTREE_COST)
-        row.method = "octree-cost";
-    else if (kind == BSP_ACCEL_GRID && o->cl.cells.grid_assign_bounds)
-        row.method = "grid-bounds";
     bsp_build_options bo;
     bsp_build_options_defaults(&bo);
     bo.kind = kind;
     bo.mailbox = o->cl.mailbox;
     apply_cost_args(&o->cl.costs, &bo);
     apply_subdivision_args(&o->cl.cells, &bo);
+    row.method = method_label(&bo);
     if (!o->cl.quiet)
         fprintf(stderr, "%s: %s: %s: building\n", prog, scene_name, row.method);
     bo.threads = 1; /* T_B is the single-threaded build */

@@ -557,6 +557,15 @@ void apply_subdivision_args(const bsp_build_options *from, bsp_build_options *to
     to->octree_split = from->octree_split;
 }
 
+const char *method_label(const bsp_build_options *o)
+{
+    if (o->kind == BSP_ACCEL_OCTREE && o->octree_split == BSP_OCTREE_COST)
+        return "octree-cost";
+    if (o->kind == BSP_ACCEL_GRID && o->grid_assign_bounds)
+        return "grid-bounds";
+    return bsp_accel_kind_name(o->kind);
+}
+
 const char build_args_help[] =
     "  --accel METHOD     acceleration method: sah (default), sah-per, sah-par, sah-mixed,\n"
     "                     kaplan, grid (a uniform grid), octree (centre subdivision), naive\n"

@@ -143,6 +143,10 @@ void tree_stats_json(FILE *f, const char *indent, const bsp_tree_stats *t, bsp_a
 int parse_subdivision_arg(args *a, bsp_build_options *opts);
 /* Copies those options from FROM into TO. */
 void apply_subdivision_args(const bsp_build_options *from, bsp_build_options *to);
+/* The name tables and pictures give the structure O builds: its method's,
+ * or for the variants those options make, "octree-cost" (the octree cut by
+ * cost) and "grid-bounds" (the grid listing by bounds). */
+const char *method_label(const bsp_build_options *o);
 
 /* Whether a build of method K uses bsp_build_options.threads (the sah
  * family): the benchmarks then time it on all threads too. */

@@ -76,6 +76,7 @@ static const char viz_help[] =
 
 typedef struct viz_row {
     bsp_accel_kind kind;
+    const char *label; /* method_label of its build */
     bsp_accel *accel;
     draw_cells cells;
 } viz_row;
@@ -236,6 +237,7 @@ int cmd_viz(int argc, char **argv)
         bopts.max_leaf_prims = leaf_size;
         apply_cost_args(&costs, &bopts);
         apply_subdivision_args(&subdivision_opts, &bopts);
+        rows[r].label = method_label(&bopts);
         rows[r].accel = build_accel(scene, &bopts);
         if (draw_cells_collect(rows[r].accel, &rows[r].cells, &err) != BSP_OK) {
             fprintf(stderr, "%s: %s\n", prog, err.message);
@@ -257,10 +259,10 @@ int cmd_viz(int argc, char **argv)
         for (int k = 0; k < 3; k++)
             ext[k] = full > 0 ? ext[k] / full : 0.0;
         if (!quiet)
-            printf("%s: %-9s %5" PRIu64 " leaves (%" PRIu64 " empty), %" PRIu64
+            printf("%s: %-11s %5" PRIu64 " leaves (%" PRIu64 " empty), %" PRIu64
                    " references, depth %d, non-empty leaves %.3g x %.3g x %.3g on average, "
                    "built in %.3f s\n",
-                   scene_path, bsp_accel_kind_name(rows[r].kind), c->leaves, c->empty,
+                   scene_path, rows[r].label, c->leaves, c->empty,
                    ts.references, c->max_depth, ext[0], ext[1], ext[2],
                    bsp_accel_build_seconds(rows[r].accel));
     }
@@ -312,7 +314,7 @@ int cmd_viz(int argc, char **argv)
         draw_panel_planes(panel, &pin, c, max_depth);
         draw_panel_root(panel, &pin, c);
         snprintf(text, sizeof text, "%s: %" PRIu64 " LEAVES (%" PRIu64 " EMPTY)",
-                 bsp_accel_kind_name(rows[r].kind), c->leaves, c->empty);
+                 rows[r].label, c->leaves, c->empty);
         text_upper(text);
         int y = 2 * font;
         y += draw_label(panel, 2 * font, y, font, text) + font;
