@@ -103,12 +103,18 @@ TEST(octree_default_depth_gives_eight_finest_cells_per_primitive)
     CHECK_EQ_INT(kd_octree_default_depth(4096), 5);
     CHECK_EQ_INT(kd_octree_default_depth(4097), 6);
     CHECK_EQ_INT(kd_octree_default_depth((size_t)1 << 40), 15); /* 8^15 = 2^45 >= 2^43 */
-    /* and a build without a depth takes it: tetra's 4,096 triangles */
+    /* and a build without a depth takes it: tetra's 4,096 triangles; the
+     * options of the structure say so, with the split asked for */
     bsp_scene *s = havran_test_scene("spd:tetra");
-    bsp_accel *a = octree_of(s, 0, 1);
+    bsp_accel *a = octree_split_of(s, 0, 1, BSP_OCTREE_COST);
     bsp_tree_stats st;
     bsp_accel_tree_stats(a, &st);
     CHECK_EQ_INT(st.max_leaf_depth, 5);
+    bsp_build_options got;
+    bsp_accel_get_options(a, &got);
+    CHECK(got.kind == BSP_ACCEL_OCTREE && got.octree_split == BSP_OCTREE_COST);
+    CHECK_EQ_INT(got.max_depth, 5);
+    CHECK_EQ_INT(got.max_leaf_prims, 1);
     bsp_accel_destroy(a);
     bsp_scene_destroy(s);
 }
@@ -328,6 +334,29 @@ TEST(octree_rays_traverse_havrans_cells_on_balls)
         bsp_accel_destroy(a);
     }
     bsp_scene_destroy(s);
+}
+
+TEST(cli_octree_split_is_named_in_the_json)
+{
+    /* stats and render name the split beside "accel" (the method's name
+     * alone does not tell the two octrees apart) */
+    static const char *const cmds[] = {"stats spd:balls:1 --accel octree --octree-split cost",
+                                       "render spd:balls:1 --accel octree --res 9 -o %s/o.png"};
+    static const char *const want[] = {"\"octree_split\": \"cost\"",
+                                       "\"octree_split\": \"centre\""};
+    for (int i = 0; i < 2; i++) {
+        char json[512], cmd[2048], args[700];
+        harness_tmp_path(json, sizeof json, i ? "render.json" : "stats.json");
+        snprintf(args, sizeof args, cmds[i], harness_tmpdir());
+        snprintf(cmd, sizeof cmd, "%s %s --stats-json %s 2>&1", harness_cli(), args, json);
+        CHECK_RUN(cmd, 0, "");
+        size_t len = 0;
+        char *text = (char *)harness_read_file(json, &len);
+        REQUIRE(text);
+        CHECK_STR_CONTAINS(text, want[i]);
+        CHECK_STR_CONTAINS(text, "\"accel\": \"octree\"");
+        free(text);
+    }
 }
 
 TEST(cli_bench_octrees_prints_his_figures_beside_ours)

@@ -201,10 +201,11 @@ static void json_class(FILE *f, const char *name, const bsp_ray_class_stats *c, 
             safe_div((double)c->traversal_steps, (double)c->rays), last ? "" : ",");
 }
 
-static int write_stats_json(const char *path, const char *scene_name, bsp_accel_kind kind,
+static int write_stats_json(const char *path, const char *scene_name, const bsp_accel *accel,
                             const bsp_render_stats *st, const bsp_tree_stats *tree,
                             const bsp_mixed_check *chk, const char *tree_path)
 {
+    bsp_accel_kind kind = bsp_accel_get_kind(accel);
     FILE *f = fopen(path, "w");
     if (!f) {
         fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, path, strerror(errno));
@@ -216,8 +217,9 @@ static int write_stats_json(const char *path, const char *scene_name, bsp_accel_
     uint64_t tests = P->isect_tests + S->isect_tests + R->isect_tests;
     fprintf(f, "{\n  \"scene\": ");
     json_string(f, scene_name);
-    fprintf(f, ",\n  \"accel\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n",
-            bsp_accel_kind_name(kind), st->width, st->height);
+    fprintf(f, ",\n  \"accel\": \"%s\",\n", bsp_accel_kind_name(kind));
+    cells_variant_json(f, "  ", accel);
+    fprintf(f, "  \"width\": %d,\n  \"height\": %d,\n", st->width, st->height);
     fprintf(f, "  \"max_depth\": %d,\n  \"threads\": %d,\n", st->max_depth, st->threads);
     fprintf(f, "  \"PrimaryRay\": %" PRIu64 ",\n  \"UsedIntPrimRay\": %" PRIu64 ",\n", P->rays,
             P->hits);
@@ -395,8 +397,7 @@ static int cmd_render(int argc, char **argv)
             print_stats_table(stdout, scene_path, an, &st, ropts.sampling, &tree, &chk,
                               tree_path);
         if (json_path &&
-            !write_stats_json(json_path, scene_path, bsp_accel_get_kind(accel), &st, &tree, &chk,
-                             tree_path))
+            !write_stats_json(json_path, scene_path, accel, &st, &tree, &chk, tree_path))
             rc = EXIT_INPUT;
         if (costs) {
             bsp_image *map = costmap_draw(costs, cost_w, cost_h, cost_measure);

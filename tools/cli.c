@@ -566,6 +566,18 @@ const char *method_label(const bsp_build_options *o)
     return bsp_accel_kind_name(o->kind);
 }
 
+void cells_variant_json(FILE *f, const char *indent, const bsp_accel *accel)
+{
+    bsp_build_options o;
+    bsp_accel_get_options(accel, &o);
+    if (o.kind == BSP_ACCEL_GRID)
+        fprintf(f, "%s\"grid_assign\": \"%s\",\n", indent,
+                o.grid_assign_bounds ? "bounds" : "clipped");
+    else if (o.kind == BSP_ACCEL_OCTREE)
+        fprintf(f, "%s\"octree_split\": \"%s\",\n", indent,
+                o.octree_split == BSP_OCTREE_COST ? "cost" : "centre");
+}
+
 const char build_args_help[] =
     "  --accel METHOD     acceleration method: sah (default), sah-per, sah-par, sah-mixed,\n"
     "                     kaplan, grid (a uniform grid), octree (centre subdivision), naive\n"
@@ -715,6 +727,7 @@ int write_stats_json_file(const char *path, const char *scene_path, const bsp_sc
         tree_stats_json(f, "    ", t, kind);
         if (checked)
             fprintf(f, "    \"invariants\": \"%s\",\n", checked > 0 ? "ok" : "failed");
+        cells_variant_json(f, "    ", accel);
         fprintf(f, "    \"accel\": \"%s\"\n  }", bsp_accel_kind_name(kind));
     }
     fputs("\n}\n", f);

@@ -147,6 +147,11 @@ void apply_subdivision_args(const bsp_build_options *from, bsp_build_options *to
  * or for the variants those options make, "octree-cost" (the octree cut by
  * cost) and "grid-bounds" (the grid listing by bounds). */
 const char *method_label(const bsp_build_options *o);
+/* For a grid or an octree, the JSON member of the option that changes what
+ * it is ("grid_assign": "clipped"|"bounds", "octree_split": "centre"|
+ * "cost"), after INDENT and followed by a comma and a newline; nothing for
+ * other methods. */
+void cells_variant_json(FILE *f, const char *indent, const bsp_accel *accel);
 
 /* Whether a build of method K uses bsp_build_options.threads (the sah
  * family): the benchmarks then time it on all threads too. */

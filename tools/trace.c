@@ -240,8 +240,9 @@ static int write_json(const char *path, const char *scene, const trace_run *r,
     const bsp_query_counters *c = &r->counters;
     fprintf(f, "{\n  \"scene\": ");
     json_string(f, scene);
-    fprintf(f, ",\n  \"accel\": \"%s\",\n  \"queries\": \"%s\",\n",
-            bsp_accel_kind_name(bsp_accel_get_kind(r->accel)), r->any ? "occlusion" : "closest");
+    fprintf(f, ",\n  \"accel\": \"%s\",\n", bsp_accel_kind_name(bsp_accel_get_kind(r->accel)));
+    cells_variant_json(f, "  ", r->accel);
+    fprintf(f, "  \"queries\": \"%s\",\n", r->any ? "occlusion" : "closest");
     fprintf(f, "  \"threads\": %d,\n  \"rays\": %" PRIu64 ",\n  \"%s\": %" PRIu64 ",\n", r->threads,
             c->rays, r->any ? "occluded" : "hits", r->answered);
     fprintf(f,

@@ -237,6 +237,11 @@ bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts
 void bsp_accel_destroy(bsp_accel *accel);
 const bsp_scene *bsp_accel_scene(const bsp_accel *accel);
 bsp_accel_kind bsp_accel_get_kind(const bsp_accel *accel);
+/* The options ACCEL was built with into *OUT, with what its build chose
+ * for a 0 filled in (a kd-tree's or octree's max_depth and max_leaf_prims);
+ * for a loaded tree, the saved ones (bsp_accel_load), the rest the
+ * defaults. */
+void bsp_accel_get_options(const bsp_accel *accel, bsp_build_options *out);
 /* Seconds spent in bsp_accel_build (for a loaded tree: in bsp_accel_load). */
 double bsp_accel_build_seconds(const bsp_accel *accel);
 

@@ -136,6 +136,11 @@ bsp_accel_kind bsp_accel_get_kind(const bsp_accel *a)
     return a->opts.kind;
 }
 
+void bsp_accel_get_options(const bsp_accel *a, bsp_build_options *out)
+{
+    *out = a->opts;
+}
+
 double bsp_accel_build_seconds(const bsp_accel *a)
 {
     return a->build_seconds;
