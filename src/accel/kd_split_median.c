@@ -38,10 +38,38 @@ typedef struct median_build {
  * the way to the median of its primitives (octree_planes). */
 #define OCTREE_COST_CANDIDATES 10
 
-static int cmp_double(const void *a, const void *b)
+/* The K-th smallest of A[0..N) (K < N; A is reordered): quickselect with
+ * a median-of-three pivot and a three-way partition, so runs of equal
+ * values (centres clamped to a face of the box) cost one pass. O(N)
+ * expected; the value is the sorted array's A[K] whatever the order. */
+static double select_kth(double *a, size_t n, size_t k)
 {
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
+    size_t lo = 0, hi = n; /* the answer lies in a[lo..hi) */
+    while (hi - lo > 1) {
+        double x = a[lo], y = a[lo + (hi - lo) / 2], z = a[hi - 1];
+        double pivot = x < y ? (y < z ? y : (x < z ? z : x)) : (x < z ? x : (y < z ? z : y));
+        /* a[lo..lt) < pivot, a[lt..i) == pivot, a(gt..hi) > pivot */
+        size_t lt = lo, i = lo, gt = hi;
+        while (i < gt) {
+            double v = a[i];
+            if (v < pivot) {
+                a[i++] = a[lt];
+                a[lt++] = v;
+            } else if (v > pivot) {
+                a[i] = a[--gt];
+                a[gt] = v;
+            } else {
+                i++;
+            }
+        }
+        if (k < lt)
+            hi = lt;
+        else if (k >= gt)
+            lo = gt;
+        else
+            return pivot;
+    }
+    return a[lo];
 }
 
 /* The estimate Havran states for his adaptive octrees (after MacDonald and
@@ -81,8 +109,7 @@ static int octree_planes(median_build *b, bsp_box box, const uint32_t *list, siz
             double plo = p->lo.v[k] > lo ? p->lo.v[k] : lo, phi = p->hi.v[k] < hi ? p->hi.v[k] : hi;
             b->centres[j] = 0.5 * (plo + phi);
         }
-        qsort(b->centres, n, sizeof *b->centres, cmp_double);
-        double median = b->centres[n / 2];
+        double median = select_kth(b->centres, n, n / 2);
         double a = hi - lo, e1 = box.hi.v[(k + 1) % 3] - box.lo.v[(k + 1) % 3],
                e2 = box.hi.v[(k + 2) % 3] - box.lo.v[(k + 2) % 3];
         double best_cost = 0.0;
