@@ -339,17 +339,19 @@ TEST(octree_rays_traverse_havrans_cells_on_balls)
 TEST(cli_octree_split_is_named_in_the_json)
 {
     /* stats and render name the split beside "accel" (the method's name
-     * alone does not tell the two octrees apart) */
+     * alone does not tell the two octrees apart), and their tables the
+     * octree cut by cost "octree-cost" */
     static const char *const cmds[] = {"stats spd:balls:1 --accel octree --octree-split cost",
                                        "render spd:balls:1 --accel octree --res 9 -o %s/o.png"};
     static const char *const want[] = {"\"octree_split\": \"cost\"",
                                        "\"octree_split\": \"centre\""};
+    static const char *const said[] = {"structure: octree-cost", "| method | octree, depth"};
     for (int i = 0; i < 2; i++) {
         char json[512], cmd[2048], args[700];
         harness_tmp_path(json, sizeof json, i ? "render.json" : "stats.json");
         snprintf(args, sizeof args, cmds[i], harness_tmpdir());
         snprintf(cmd, sizeof cmd, "%s %s --stats-json %s 2>&1", harness_cli(), args, json);
-        CHECK_RUN(cmd, 0, "");
+        CHECK_RUN(cmd, 0, said[i]);
         size_t len = 0;
         char *text = (char *)harness_read_file(json, &len);
         REQUIRE(text);

@@ -388,7 +388,7 @@ static int cmd_render(int argc, char **argv)
             fprintf(stderr, "%s: %s\n", prog, err.message);
             rc = EXIT_INPUT;
         }
-        const char *an = bsp_accel_kind_name(bsp_accel_get_kind(accel));
+        const char *an = accel_label(accel);
         bsp_tree_stats tree;
         bsp_accel_tree_stats(accel, &tree);
         bsp_mixed_check chk;
@@ -548,7 +548,7 @@ static int cmd_stats(int argc, char **argv)
         accel = tree_or_build(&a, scene, &bopts, tree_path);
         bsp_accel_tree_stats(accel, &t);
         bsp_accel_kind kind = bsp_accel_get_kind(accel);
-        printf("structure: %s%s%s\n", bsp_accel_kind_name(kind), tree_path ? ", loaded from " : "",
+        printf("structure: %s%s%s\n", accel_label(accel), tree_path ? ", loaded from " : "",
                tree_path ? tree_path : "");
         if (tree_path)
             printf("  load[s]        %.4f\n", bsp_accel_build_seconds(accel));

@@ -566,6 +566,13 @@ const char *method_label(const bsp_build_options *o)
     return bsp_accel_kind_name(o->kind);
 }
 
+const char *accel_label(const bsp_accel *accel)
+{
+    bsp_build_options o;
+    bsp_accel_get_options(accel, &o);
+    return method_label(&o);
+}
+
 void cells_variant_json(FILE *f, const char *indent, const bsp_accel *accel)
 {
     bsp_build_options o;

@@ -152,6 +152,8 @@ const char *method_label(const bsp_build_options *o);
  * "cost"), after INDENT and followed by a comma and a newline; nothing for
  * other methods. */
 void cells_variant_json(FILE *f, const char *indent, const bsp_accel *accel);
+/* method_label of the options ACCEL was built with. */
+const char *accel_label(const bsp_accel *accel);
 
 /* Whether a build of method K uses bsp_build_options.threads (the sah
  * family): the benchmarks then time it on all threads too. */
