@@ -5,6 +5,9 @@
 # --replay only runs the seeds once each (deterministic; what CI does).
 # A finding is written to build-fuzz/finding-TARGET-* and the run stops with
 # exit status 1; replay one with build-fuzz/fuzz_TARGET FILE.
+# The whole script is one block, read before it runs, so that editing this
+# file during a long run cannot change what the run does.
+{
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=60 replay=0
@@ -67,3 +70,4 @@ for t in build-fuzz/fuzz_*; do
 done
 rm -f /tmp/bspray-fuzz-tree-*.kdt # fuzz_tree_file's file (libFuzzer ends without atexit)
 exit $status
+}
