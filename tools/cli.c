@@ -587,7 +587,7 @@ void cells_variant_json(FILE *f, const char *indent, const bsp_accel *accel)
 
 const char build_args_help[] =
     "  --accel METHOD     acceleration method: sah (default), sah-per, sah-par, sah-mixed,\n"
-    "                     kaplan, grid (a uniform grid), octree (centre subdivision), naive\n"
+    "                     kaplan, grid (a uniform grid), octree (--octree-split), naive\n"
     "                     (sah-per/-par/-mixed build for the camera's rays)\n"
     "  --mailbox on|off   test each primitive at most once per ray (default on)\n"
     "  --max-depth N      kd-tree: deepest leaf (default kaplan 18, sah round(8 + 1.3 log2 N));\n"
