@@ -917,7 +917,8 @@ TEST(cli_bench_modes_share_their_options)
 TEST(cli_bench_names_the_cells_variants)
 {
     /* the grid listing by bounds and the octree cut by cost are named as
-     * such in the table (and its CSV), so a pasted table says what it is */
+     * such in the table (and its CSV), so a pasted table says what it is,
+     * and --accel takes those names */
     char cmd[1024];
     snprintf(cmd, sizeof cmd,
              "%s bench spd:balls:1 --accel octree,grid --octree-split cost --grid-assign bounds "
@@ -930,13 +931,20 @@ TEST(cli_bench_names_the_cells_variants)
     CHECK_STR_CONTAINS(out, "| spd:balls:1 | 11 | octree-cost |");
     CHECK_STR_CONTAINS(out, "| spd:balls:1 | 11 | grid-bounds |");
     free(out);
+    /* the same names as methods: both octrees and both grids in one run */
     snprintf(cmd, sizeof cmd,
-             "%s bench spd:balls:1 --accel octree,grid --res 9 --validate 200 --repeat 1 --quiet "
-             "2>&1",
+             "%s bench spd:balls:1 --accel octree,octree-cost,grid,grid-bounds --res 9 "
+             "--validate 200 --repeat 1 --quiet 2>&1",
              harness_cli());
     out = harness_run(cmd, &st);
     REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
     CHECK_STR_CONTAINS(out, "| spd:balls:1 | 11 | octree |");
+    CHECK_STR_CONTAINS(out, "| spd:balls:1 | 11 | octree-cost |");
     CHECK_STR_CONTAINS(out, "| spd:balls:1 | 11 | grid |");
+    CHECK_STR_CONTAINS(out, "| spd:balls:1 | 11 | grid-bounds |");
     free(out);
+    snprintf(cmd, sizeof cmd, "%s render spd:balls:1 --accel octree-centre 2>&1", harness_cli());
+    CHECK_RUN(cmd, 2, "(known: naive, kaplan, sah, sah-per, sah-par, sah-mixed, grid, octree, "
+                      "octree-cost, grid-bounds)");
 }

@@ -256,17 +256,21 @@ long bench_validate(const bsp_accel *accel, const bsp_accel *naive, const bsp_sc
 
 /* --- the benchmark ---------------------------------------------------------------- */
 
+/* every kind, and the variants' names (accel_method) */
+#define BENCH_MAX_METHODS (BSP_ACCEL_KIND_COUNT + 2)
+
 typedef struct bench_opts {
     bench_cmdline cl; /* repeat: timed renders per figure; T_TR is the best */
-    bsp_accel_kind kinds[BSP_ACCEL_KIND_COUNT];
-    int nkinds, kinds_given;
+    accel_method methods[BENCH_MAX_METHODS];
+    int nmethods, methods_given;
     FILE *csv;
 } bench_opts;
 
 typedef struct bench_row {
     const char *scene;
     size_t nprims;
-    const char *method;
+    const char *method; /* method_label of its build */
+    int method_index;   /* in bench_opts.methods */
     double t_build, mbytes;
     bsp_tree_stats tree;
     double n_it, n_ts, n_ets, n_eets;
@@ -335,7 +339,7 @@ static void csv_row(FILE *f, const bench_row *r, int threads)
 /* Benchmarks one method on SCENE into *OUT; returns 0, or 1 when validation
  * failed. */
 static int bench_method(const bench_opts *o, const char *scene_name, const bsp_scene *scene,
-                        const bsp_accel *naive, bsp_accel_kind kind, bench_row *out)
+                        const bsp_accel *naive, int method_index, bench_row *out)
 {
     bench_row row;
     memset(&row, 0, sizeof row);
@@ -343,11 +347,13 @@ static int bench_method(const bench_opts *o, const char *scene_name, const bsp_s
     row.nprims = bsp_scene_prim_count(scene);
     bsp_build_options bo;
     bsp_build_options_defaults(&bo);
-    bo.kind = kind;
     bo.mailbox = o->cl.mailbox;
     apply_cost_args(&o->cl.costs, &bo);
     apply_subdivision_args(&o->cl.cells, &bo);
+    apply_method(&o->methods[method_index], &bo); /* a variant's name wins over the options */
+    const bsp_accel_kind kind = bo.kind;
     row.method = method_label(&bo);
+    row.method_index = method_index;
     if (!o->cl.quiet)
         fprintf(stderr, "%s: %s: %s: building\n", prog, scene_name, row.method);
     bo.threads = 1; /* T_B is the single-threaded build */
@@ -512,7 +518,7 @@ int bench_write_bars(const char *path, const char *title, const char *ylabel,
  * the file could not be written (with a message). */
 static int write_plot(const char *path, const bench_row *rows, int nrows, const bench_opts *o)
 {
-    const size_t nr = (size_t)nrows, nk = (size_t)o->nkinds;
+    const size_t nr = (size_t)nrows, nk = (size_t)o->nmethods;
     const char **scenes = calloc(nr + 1, sizeof *scenes), **names = calloc(nk + 1, sizeof *names);
     double *t = calloc(nk * (nr + 1), sizeof *t);
     int rc = 0;
@@ -524,14 +530,14 @@ static int write_plot(const char *path, const bench_row *rows, int nrows, const 
             if (ns == 0 || strcmp(scenes[ns - 1], rows[i].scene))
                 scenes[ns++] = rows[i].scene;
         for (size_t k = 0; k < nk; k++)
-            names[k] = bsp_accel_kind_name(o->kinds[k]);
+            names[k] = accel_method_name(&o->methods[k]);
+        for (size_t i = 0; i < nr; i++) /* the names the table gives */
+            names[rows[i].method_index] = rows[i].method;
         for (size_t i = 0; i < nk * ns; i++)
             t[i] = NAN; /* no bar: the method did not run on the scene */
         for (size_t i = 0, c = 0; i < nr; i++) {
             c += i > 0 && strcmp(rows[i - 1].scene, rows[i].scene) != 0;
-            for (size_t k = 0; k < nk; k++)
-                if (!strcmp(rows[i].method, names[k]))
-                    t[k * ns + c] = rows[i].t_tr1;
+            t[(size_t)rows[i].method_index * ns + c] = rows[i].t_tr1;
         }
         char title[160];
         snprintf(title, sizeof title, "RENDER TIME, ONE THREAD (%d X %d, DEPTH %d)", o->cl.res,
@@ -551,8 +557,8 @@ static int bench_option(args *a, const char *s, void *ctx)
     bench_opts *o = ctx;
     if (strcmp(s, "--accel"))
         return 0;
-    o->nkinds = parse_accel_list(a, opt_value(a, s), o->kinds, BSP_ACCEL_KIND_COUNT);
-    o->kinds_given = 1;
+    o->nmethods = parse_accel_list(a, opt_value(a, s), o->methods, BENCH_MAX_METHODS);
+    o->methods_given = 1;
     return 1;
 }
 
@@ -577,7 +583,7 @@ int cmd_bench(int argc, char **argv)
     o.cl.nvalidate = 20000;
     /* the default methods: naive, kaplan, sah (the view rules: --accel, or --paper) */
     for (int k = BSP_ACCEL_NAIVE; k <= BSP_ACCEL_SAH; k++)
-        o.kinds[o.nkinds++] = (bsp_accel_kind)k;
+        o.methods[o.nmethods++] = (accel_method){(bsp_accel_kind)k, 0};
     if (bench_read_cmdline(&a, &o.cl, bench_option, &o, print_help))
         return 0;
     if (!bench_cmdline_ready(&o.cl, 1, &o.csv))
@@ -585,7 +591,7 @@ int cmd_bench(int argc, char **argv)
     const char **scenes = o.cl.scenes;
     int nscenes = o.cl.nscenes;
     const char *csv_path = o.cl.csv_path, *plot_path = o.cl.plot_path;
-    bench_row *rows = calloc((size_t)nscenes * (size_t)o.nkinds + 1, sizeof *rows);
+    bench_row *rows = calloc((size_t)nscenes * (size_t)o.nmethods + 1, sizeof *rows);
     if (!rows) {
         fprintf(stderr, "%s: out of memory\n", prog);
         if (o.csv)
@@ -608,11 +614,11 @@ int cmd_bench(int argc, char **argv)
         bsp_build_options_defaults(&naive_opts);
         naive_opts.kind = BSP_ACCEL_NAIVE; /* the reference; the default is a tree */
         bsp_accel *naive = build_accel(scene, &naive_opts);
-        for (int k = 0; k < o.nkinds && rc == 0; k++) {
-            if (o.kinds[k] == BSP_ACCEL_NAIVE && !o.kinds_given &&
+        for (int k = 0; k < o.nmethods && rc == 0; k++) {
+            if (o.methods[k].kind == BSP_ACCEL_NAIVE && !o.methods_given &&
                 bsp_scene_prim_count(scene) > NAIVE_DEFAULT_MAX_PRIMS)
                 continue; /* would not finish in reasonable time */
-            rc = bench_method(&o, scenes[i], scene, naive, o.kinds[k], &rows[nrows]);
+            rc = bench_method(&o, scenes[i], scene, naive, k, &rows[nrows]);
             nrows += rc == 0;
         }
         bsp_accel_destroy(naive);

@@ -46,10 +46,10 @@ const char *const bench_scaling_default_scenes[] = {
 #define SCALING_BIG_PRIMS 500000
 #define SCALING_BIG_REPEAT 2
 
-#define MAX_KINDS BSP_ACCEL_KIND_COUNT
+#define MAX_KINDS (BSP_ACCEL_KIND_COUNT + 2) /* every kind, and the variants' names */
 
 typedef struct scaling_opts {
-    bsp_accel_kind kinds[MAX_KINDS];
+    accel_method kinds[MAX_KINDS];
     int nkinds;
     bench_cmdline cl;
 } scaling_opts;
@@ -57,7 +57,7 @@ typedef struct scaling_opts {
 /* The figures of one scene x method. */
 typedef struct scaling_row {
     const char *scene;
-    bsp_accel_kind kind;
+    accel_method method;
     size_t n;
     int builds;         /* builds per thread count */
     double t1_cpu;      /* best build, 1 thread, its CPU time */
@@ -128,14 +128,14 @@ static void timed_builds(const scaling_opts *o, const bsp_scene *scene, scaling_
 {
     bsp_build_options bo;
     bsp_build_options_defaults(&bo);
-    bo.kind = r->kind;
+    apply_method(&r->method, &bo);
     bo.threads = threads;
     apply_cost_args(&o->cl.costs, &bo);
     *cpu = *wall = INFINITY;
     for (int rep = 0; rep < r->builds; rep++) {
         if (!o->cl.quiet)
             fprintf(stderr, "%s: %s (%zu primitives): %s: build %d of %d on %d thread%s\n", prog,
-                    r->scene, r->n, bsp_accel_kind_name(r->kind), rep + 1, r->builds, threads,
+                    r->scene, r->n, accel_method_name(&r->method), rep + 1, r->builds, threads,
                     threads == 1 ? "" : "s");
         double c0 = bench_cpu_seconds();
         bsp_accel *accel = build_accel(scene, &bo);
@@ -161,7 +161,7 @@ static void measure(const scaling_opts *o, const bsp_scene *scene, scaling_row *
         r->builds = SCALING_BIG_REPEAT;
     timed_builds(o, scene, r, 1, &r->t1_cpu, &r->t1_wall);
     r->tn_wall = r->t1_wall;
-    if (o->cl.threads > 1 && kind_builds_in_parallel(r->kind)) {
+    if (o->cl.threads > 1 && kind_builds_in_parallel(r->method.kind)) {
         double cpu_unused;
         timed_builds(o, scene, r, o->cl.threads, &cpu_unused, &r->tn_wall);
     }
@@ -197,7 +197,7 @@ static void print_row(const scaling_row *r)
         snprintf(cost, sizeof cost, "%.2f", r->tree.expected_cost);
     printf("| %s | %s | %zu | %.4g | %.3f | %.2f | %.4g | %.4g | %.2f | %" PRIu64 " | %" PRIu64
            " | %" PRIu64 " | %s | %.2f |\n",
-           r->scene, bsp_accel_kind_name(r->kind), r->n, r->t1_cpu, us_per_prim(r),
+           r->scene, accel_method_name(&r->method), r->n, r->t1_cpu, us_per_prim(r),
            mprim_per_s(r), r->t1_first, r->tn_wall, speedup(r), r->tree.interior_nodes,
            r->tree.leaves, r->tree.references, cost,
            (double)(r->tree.bytes + r->tree.trace_bytes) / (1024.0 * 1024.0));
@@ -215,7 +215,7 @@ static void csv_row(FILE *f, const scaling_row *r, int threads)
     fprintf(f,
             "%s,%s,%zu,%.9f,%.6f,%.4f,%.9f,%d,%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%.4f,%" PRIu64
             ",%.4f,%d,%.9f,%016" PRIx64 "\n",
-            r->scene, bsp_accel_kind_name(r->kind), r->n, r->t1_cpu, us_per_prim(r),
+            r->scene, accel_method_name(&r->method), r->n, r->t1_cpu, us_per_prim(r),
             mprim_per_s(r), r->tn_wall, threads, r->tree.interior_nodes, r->tree.leaves,
             r->tree.references, r->tree.expected_cost, r->tree.bytes + r->tree.trace_bytes,
             speedup(r), r->builds, r->t1_first, r->tree.digest);
@@ -247,7 +247,8 @@ static size_t take_group(const scaling_row *rows, int nrows, int i, char *seen, 
     generator_of(rows[i].scene, gen, gen_size);
     size_t m = 0;
     for (int j = i; j < nrows; j++) {
-        if (seen[j] || rows[j].kind != rows[i].kind ||
+        if (seen[j] || rows[j].method.kind != rows[i].method.kind ||
+            rows[j].method.variant != rows[i].method.variant ||
             strcmp(generator_of(rows[j].scene, gj, sizeof gj), gen))
             continue;
         seen[j] = 1;
@@ -287,7 +288,7 @@ static void print_summary(const scaling_row *rows, int nrows)
         }
         double ua = us_per_prim(&rows[lo]), ub = us_per_prim(&rows[hi]);
         printf("| %s | %s | %zu → %zu | %.3f → %.3f | %.2fx | %.2fx |\n", gi,
-               bsp_accel_kind_name(rows[i].kind), rows[lo].n, rows[hi].n, ua, ub,
+               accel_method_name(&rows[i].method), rows[lo].n, rows[hi].n, ua, ub,
                ua > 0.0 ? ub / ua : 0.0, log((double)rows[hi].n) / log((double)rows[lo].n));
     }
     free(seen);
@@ -321,7 +322,7 @@ static int write_plot(const char *path, const scaling_row *rows, int nrows)
         }
         nx += m;
         ny += m;
-        snprintf(names[ns], sizeof names[ns], "%s %s", gi, bsp_accel_kind_name(rows[i].kind));
+        snprintf(names[ns], sizeof names[ns], "%s %s", gi, accel_method_name(&rows[i].method));
         series[ns] = (plot_series){names[ns], x, y, m, 0, group};
         ns++;
         if (m >= 2 && x[0] >= 2.0) { /* its ln N line, through the same N */
@@ -379,7 +380,7 @@ static int scaling_option(args *a, const char *s, void *ctx)
         return 0;
     o->nkinds = parse_accel_list(a, opt_value(a, s), o->kinds, MAX_KINDS);
     for (int k = 0; k < o->nkinds; k++)
-        if (o->kinds[k] == BSP_ACCEL_NAIVE)
+        if (o->kinds[k].kind == BSP_ACCEL_NAIVE)
             die_usage(a->usage, "%s", "--scaling times tree builds; naive has none");
     return 1;
 }
@@ -389,7 +390,7 @@ int bench_scaling(int argc, char **argv)
     args a = {argc, 1, argv, scaling_usage, NULL};
     scaling_opts o;
     memset(&o, 0, sizeof o);
-    o.kinds[o.nkinds++] = BSP_ACCEL_SAH;
+    o.kinds[o.nkinds++] = (accel_method){BSP_ACCEL_SAH, 0};
     bench_cmdline_init(&o.cl, BENCH_TAKES_REPEAT | BENCH_TAKES_COSTS | BENCH_TAKES_PLOT,
                        "--scaling", bench_scaling_default_scenes);
     if (bench_read_cmdline(&a, &o.cl, scaling_option, &o, print_help))
@@ -420,7 +421,7 @@ int bench_scaling(int argc, char **argv)
         for (int k = 0; k < o.nkinds; k++) {
             scaling_row *r = &rows[nrows++];
             r->scene = scenes[s];
-            r->kind = o.kinds[k];
+            r->method = o.kinds[k];
             r->n = bsp_scene_prim_count(scene);
             measure(&o, scene, r);
             print_row(r);
@@ -430,7 +431,7 @@ int bench_scaling(int argc, char **argv)
                 fprintf(stderr,
                         "%s: %s: %s: the builds made different trees (1 and %d threads, "
                         "or repeated builds): the build is not deterministic\n",
-                        prog, r->scene, bsp_accel_kind_name(r->kind), o.cl.threads);
+                        prog, r->scene, accel_method_name(&r->method), o.cl.threads);
                 mismatch = 1;
             }
         }

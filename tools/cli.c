@@ -169,16 +169,58 @@ bsp_accel *build_accel(const bsp_scene *scene, const bsp_build_options *opts)
     return accel;
 }
 
+/* The names of the variants (accel_method), by kind. */
+static const struct {
+    const char *name;
+    bsp_accel_kind kind;
+} variant_names[] = {{"octree-cost", BSP_ACCEL_OCTREE}, {"grid-bounds", BSP_ACCEL_GRID}};
+
+void apply_method(const accel_method *m, bsp_build_options *o)
+{
+    o->kind = m->kind;
+    if (m->variant && m->kind == BSP_ACCEL_OCTREE)
+        o->octree_split = BSP_OCTREE_COST;
+    else if (m->variant && m->kind == BSP_ACCEL_GRID)
+        o->grid_assign_bounds = 1;
+}
+
+const char *accel_method_name(const accel_method *m)
+{
+    for (size_t i = 0; m->variant && i < sizeof variant_names / sizeof *variant_names; i++)
+        if (variant_names[i].kind == m->kind)
+            return variant_names[i].name;
+    return bsp_accel_kind_name(m->kind);
+}
+
+/* NAME as a method into *M, or a usage error listing every name. */
+static void parse_method(args *a, const char *name, accel_method *m)
+{
+    for (size_t i = 0; i < sizeof variant_names / sizeof *variant_names; i++)
+        if (!strcmp(name, variant_names[i].name)) {
+            m->kind = variant_names[i].kind;
+            m->variant = 1;
+            return;
+        }
+    bsp_error err;
+    m->variant = 0;
+    if (bsp_accel_kind_parse(name, &m->kind, &err) != BSP_OK) {
+        /* the library's message lists its kinds; the variants are the CLI's */
+        char *close = strrchr(err.message, ')');
+        if (close)
+            *close = 0;
+        die_usage(a->usage, "%s, octree-cost, grid-bounds)", err.message);
+    }
+}
+
 void parse_accel(args *a, bsp_build_options *opts)
 {
-    const char *v = opt_value(a, "--accel");
-    bsp_error err;
-    if (bsp_accel_kind_parse(v, &opts->kind, &err) != BSP_OK)
-        die_usage(a->usage, "%s", err.message);
+    accel_method m;
+    parse_method(a, opt_value(a, "--accel"), &m);
+    apply_method(&m, opts);
 }
 
 
-int parse_accel_list(args *a, const char *list, bsp_accel_kind *kinds, int max)
+int parse_accel_list(args *a, const char *list, accel_method *methods, int max)
 {
     int n = 0;
     for (const char *p = list;;) {
@@ -195,9 +237,7 @@ int parse_accel_list(args *a, const char *list, bsp_accel_kind *kinds, int max)
         }
         memcpy(name, p, len);
         name[len] = 0;
-        bsp_error err;
-        if (bsp_accel_kind_parse(name, &kinds[n], &err) != BSP_OK)
-            die_usage(a->usage, "%s", err.message);
+        parse_method(a, name, &methods[n]);
         n++;
         if (!comma)
             return n;
@@ -588,7 +628,9 @@ void cells_variant_json(FILE *f, const char *indent, const bsp_accel *accel)
 const char build_args_help[] =
     "  --accel METHOD     acceleration method: sah (default), sah-per, sah-par, sah-mixed,\n"
     "                     kaplan, grid (a uniform grid), octree (--octree-split), naive\n"
-    "                     (sah-per/-par/-mixed build for the camera's rays)\n"
+    "                     (sah-per/-par/-mixed build for the camera's rays); also\n"
+    "                     octree-cost and grid-bounds (the octree with --octree-split\n"
+    "                     cost, the grid with --grid-assign bounds)\n"
     "  --mailbox on|off   test each primitive at most once per ray (default on)\n"
     "  --max-depth N      kd-tree: deepest leaf (default kaplan 18, sah round(8 + 1.3 log2 N));\n"
     "                     octree: its levels, at most 21 (default: the least d, 8^d >= 8 N)\n"

@@ -44,11 +44,24 @@ int is_help(const char *s);
 void take_operand(args *a, const char **operand);
 /* A vector "x,y,z" as the value of OPT, or a usage error. */
 bsp_vec3 parse_vec3(args *a, const char *opt);
-/* A comma-separated list of methods (the value of --accel) into KINDS[0..MAX);
- * returns how many. An empty item, an unknown name or more than MAX names
- * is a usage error. */
-int parse_accel_list(args *a, const char *list, bsp_accel_kind *kinds, int max);
-/* --accel METHOD into OPTS->kind, or a usage error listing the methods. */
+/* A method of --accel: a kind, and whether it was named as the variant of
+ * its kind that an option makes (VARIANT 1: "octree-cost", the octree with
+ * --octree-split cost; "grid-bounds", the grid with --grid-assign bounds),
+ * the names method_label gives them in tables. */
+typedef struct accel_method {
+    bsp_accel_kind kind;
+    int variant;
+} accel_method;
+/* Sets O->kind to M's kind and, for a variant, the option that makes it. */
+void apply_method(const accel_method *m, bsp_build_options *o);
+/* M's name: its kind's, or the variant's. */
+const char *accel_method_name(const accel_method *m);
+/* A comma-separated list of methods (the value of --accel) into
+ * METHODS[0..MAX); returns how many. An empty item, an unknown name or more
+ * than MAX names is a usage error. */
+int parse_accel_list(args *a, const char *list, accel_method *methods, int max);
+/* --accel METHOD into OPTS (apply_method), or a usage error listing the
+ * methods. */
 void parse_accel(args *a, bsp_build_options *opts);
 /* Options that choose and tune the acceleration structure: --accel,
  * --mailbox, --max-depth, --leaf-size, --mixed-share. Consumes the option at

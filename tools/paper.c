@@ -34,15 +34,16 @@ static const char paper_usage[] =
 typedef struct paper_rule {
     const char *label;
     bsp_accel_kind kind;
-    int ortho; /* rendered with (and for sah-par, built for) the orthographic camera */
+    int ortho;   /* rendered with (and for sah-par, built for) the orthographic camera */
+    int variant; /* accel_method.variant: octree-cost, grid-bounds */
 } paper_rule;
 
 #define MAX_RULES 16
 
 static const paper_rule default_rules[] = {
-    {"kaplan", BSP_ACCEL_KAPLAN, 0},    {"sah", BSP_ACCEL_SAH, 0},
-    {"sah-per", BSP_ACCEL_SAH_PER, 0},  {"sah-mixed", BSP_ACCEL_SAH_MIXED, 0},
-    {"sah, ortho", BSP_ACCEL_SAH, 1},   {"sah-par, ortho", BSP_ACCEL_SAH_PAR, 1}};
+    {"kaplan", BSP_ACCEL_KAPLAN, 0, 0},   {"sah", BSP_ACCEL_SAH, 0, 0},
+    {"sah-per", BSP_ACCEL_SAH_PER, 0, 0}, {"sah-mixed", BSP_ACCEL_SAH_MIXED, 0, 0},
+    {"sah, ortho", BSP_ACCEL_SAH, 1, 0},  {"sah-par, ortho", BSP_ACCEL_SAH_PAR, 1, 0}};
 
 /* Table 1 of the paper (scenes fluid, lattice, rings, tree; fluid is not
  * one of ours). */
@@ -127,14 +128,14 @@ static void print_help(void)
 
 static void parse_rules(args *a, paper_opts *o)
 {
-    bsp_accel_kind kinds[MAX_RULES];
-    o->nrules = parse_accel_list(a, opt_value(a, "--accel"), kinds, MAX_RULES);
+    accel_method methods[MAX_RULES];
+    o->nrules = parse_accel_list(a, opt_value(a, "--accel"), methods, MAX_RULES);
     for (int r = 0; r < o->nrules; r++) {
-        if (kinds[r] == BSP_ACCEL_NAIVE)
+        if (methods[r].kind == BSP_ACCEL_NAIVE)
             die_usage(a->usage, "%s", "--paper compares trees; naive has none");
-        int ortho = kinds[r] == BSP_ACCEL_SAH_PAR;
-        o->rules[r] = (paper_rule){ortho ? "sah-par, ortho" : bsp_accel_kind_name(kinds[r]),
-                                   kinds[r], ortho};
+        int ortho = methods[r].kind == BSP_ACCEL_SAH_PAR;
+        o->rules[r] = (paper_rule){ortho ? "sah-par, ortho" : accel_method_name(&methods[r]),
+                                   methods[r].kind, ortho, methods[r].variant};
     }
 }
 
@@ -145,7 +146,7 @@ static int build_cell(const paper_opts *o, const char *name, const bsp_scene *sc
 {
     bsp_build_options bo;
     bsp_build_options_defaults(&bo);
-    bo.kind = r->kind;
+    apply_method(&(accel_method){r->kind, r->variant}, &bo);
     bo.max_depth = 18;
     bo.max_leaf_prims = 2;
     bo.sah_split_to_limits = !o->cost_termination;
@@ -387,7 +388,7 @@ static void change_row(const table *t, int a, int b, enum figure f, int all, con
 static int find_rule(const paper_opts *o, bsp_accel_kind k, int ortho)
 {
     for (int r = 0; r < o->nrules; r++)
-        if (o->rules[r].kind == k && o->rules[r].ortho == ortho)
+        if (o->rules[r].kind == k && o->rules[r].ortho == ortho && !o->rules[r].variant)
             return r;
     return -1;
 }
@@ -476,14 +477,15 @@ static void csv_rows(FILE *f, const table *t)
             if (!c->done)
                 continue;
             const paper_rule *pr = &t->o->rules[r];
+            const char *name = accel_method_name(&(accel_method){pr->kind, pr->variant});
             for (int all = 0; all < 2; all++)
                 fprintf(f, "%s,%s,%s,%s,%.4f,%" PRIu64 ",%" PRIu64 ",%.4f,%.4f,%.6f,%.6f,%d,%s\n",
-                        t->scenes[s], bsp_accel_kind_name(pr->kind),
+                        t->scenes[s], name,
                         pr->ortho ? "ortho" : "perspective", all ? "all" : "primary",
                         figure_of(c, F_COV, 0), all ? c->rays_all : c->rays_primary,
                         c->tree.leaves, all ? c->nit_all : c->nit_primary,
                         all ? c->nts_all : c->nts_primary, c->t_build, c->t_render,
-                        t->o->cl.threads, c->kept_sah ? "sah" : bsp_accel_kind_name(pr->kind));
+                        t->o->cl.threads, c->kept_sah ? "sah" : name);
         }
 }
 

@@ -75,7 +75,7 @@ static const char viz_help[] =
     "mean size of the non-empty leaves along x, y and z (their shape), and the build time.\n";
 
 typedef struct viz_row {
-    bsp_accel_kind kind;
+    accel_method method;
     const char *label; /* method_label of its build */
     bsp_accel *accel;
     draw_cells cells;
@@ -84,10 +84,10 @@ typedef struct viz_row {
 /* Splits LIST at commas into ROWS; usage error for an unknown name. */
 static int parse_rules(args *a, const char *list, viz_row *rows)
 {
-    bsp_accel_kind kinds[VIZ_MAX_RULES];
-    int n = parse_accel_list(a, list, kinds, VIZ_MAX_RULES);
+    accel_method methods[VIZ_MAX_RULES];
+    int n = parse_accel_list(a, list, methods, VIZ_MAX_RULES);
     for (int r = 0; r < n; r++)
-        rows[r].kind = kinds[r];
+        rows[r].method = methods[r];
     return n;
 }
 
@@ -198,10 +198,10 @@ int cmd_viz(int argc, char **argv)
     memset(rows, 0, sizeof rows);
     int nrows = parse_rules(&a, list, rows);
     for (int r = 0; r < nrows; r++)
-        if (rows[r].kind == BSP_ACCEL_NAIVE) {
+        if (rows[r].method.kind == BSP_ACCEL_NAIVE) {
             fprintf(stderr,
                     "%s: viz: the naive method has no tree, so no cells to draw; "
-                    "use kaplan, sah, sah-per, sah-par, sah-mixed or grid\n",
+                    "use kaplan, sah, sah-per, sah-par, sah-mixed, grid or octree\n",
                     prog);
             return EXIT_INPUT;
         }
@@ -231,12 +231,13 @@ int cmd_viz(int argc, char **argv)
     for (int r = 0; r < nrows; r++) {
         bsp_build_options bopts;
         bsp_build_options_defaults(&bopts);
-        bopts.kind = rows[r].kind;
         /* an octree level is three kd levels: about as deep as the kd-trees */
-        bopts.max_depth = rows[r].kind == BSP_ACCEL_OCTREE ? (max_depth + 2) / 3 : max_depth;
+        bopts.max_depth =
+            rows[r].method.kind == BSP_ACCEL_OCTREE ? (max_depth + 2) / 3 : max_depth;
         bopts.max_leaf_prims = leaf_size;
         apply_cost_args(&costs, &bopts);
         apply_subdivision_args(&subdivision_opts, &bopts);
+        apply_method(&rows[r].method, &bopts); /* a variant's name wins over the options */
         rows[r].label = method_label(&bopts);
         rows[r].accel = build_accel(scene, &bopts);
         if (draw_cells_collect(rows[r].accel, &rows[r].cells, &err) != BSP_OK) {
