@@ -361,6 +361,46 @@ TEST(cli_octree_split_is_named_in_the_json)
     }
 }
 
+TEST(cli_bench_paper_gives_an_octree_the_papers_depth_in_kd_levels)
+{
+    /* --paper's depth 18 is 18 kd levels: an octree of 6 levels (18 octree
+     * levels, 54 kd levels, grew past any memory on balls:2) with at most 2
+     * primitives per leaf, the tree the library builds with those limits */
+    char csv[512], cmd[1024];
+    harness_tmp_path(csv, sizeof csv, "paper_octree.csv");
+    snprintf(cmd, sizeof cmd,
+             "%s bench --paper spd:balls:2 --accel octree-cost --res 9 --quiet --csv %s 2>&1",
+             harness_cli(), csv);
+    CHECK_RUN(cmd, 0, "octree-cost");
+    bsp_scene *s = havran_test_scene("spd:balls:2");
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_OCTREE;
+    o.octree_split = BSP_OCTREE_COST;
+    o.max_depth = 6;
+    o.max_leaf_prims = 2;
+    bsp_accel *a = NULL;
+    bsp_error err;
+    REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+    bsp_tree_stats st;
+    bsp_accel_tree_stats(a, &st);
+    FILE *f = fopen(csv, "r");
+    REQUIRE(f);
+    char line[512];
+    int rows = 0;
+    while (fgets(line, sizeof line, f)) {
+        char *fields[16];
+        if (havran_test_csv_fields(line, fields, 16) < 13 || strcmp(fields[1], "octree-cost"))
+            continue;
+        rows++;
+        CHECK(strtoull(fields[6], NULL, 10) == st.leaves); /* N_V */
+    }
+    fclose(f);
+    CHECK(rows == 2); /* primary rays and all rays */
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}
+
 TEST(cli_bench_octrees_prints_his_figures_beside_ours)
 {
     char dir[] = "/tmp/bspray-octrees-XXXXXX";
