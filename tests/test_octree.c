@@ -22,14 +22,16 @@
 #include "harness.h"
 #include "havran_test_util.h"
 
-/* The octree of depth DEPTH (0: the default) over S, cut by SPLIT, checked. */
-static bsp_accel *octree_split_of(const bsp_scene *s, int depth, int mailbox,
-                                  bsp_octree_split split)
+/* The octree of depth DEPTH (0: the default) and leaf size LEAF (0: the
+ * default) over S, cut by SPLIT, checked. */
+static bsp_accel *octree_built(const bsp_scene *s, int depth, int leaf, int mailbox,
+                               bsp_octree_split split)
 {
     bsp_build_options o;
     bsp_build_options_defaults(&o);
     o.kind = BSP_ACCEL_OCTREE;
     o.max_depth = depth;
+    o.max_leaf_prims = leaf;
     o.mailbox = mailbox;
     o.octree_split = split;
     bsp_accel *a = NULL;
@@ -39,7 +41,14 @@ static bsp_accel *octree_split_of(const bsp_scene *s, int depth, int mailbox,
     return a;
 }
 
-/* The octree of centre subdivision. */
+/* ... with the default leaf size. */
+static bsp_accel *octree_split_of(const bsp_scene *s, int depth, int mailbox,
+                                  bsp_octree_split split)
+{
+    return octree_built(s, depth, 0, mailbox, split);
+}
+
+/* ... of centre subdivision. */
 static bsp_accel *octree_of(const bsp_scene *s, int depth, int mailbox)
 {
     return octree_split_of(s, depth, mailbox, BSP_OCTREE_CENTRE);
@@ -133,6 +142,11 @@ TEST(octree_refuses_bad_options_and_saving)
     o.max_depth = BSP_OCTREE_MAX_DEPTH; /* 63 kd levels: allowed */
     o.max_leaf_prims = -1;
     CHECK(bsp_accel_build(s, &o, &a, &err) == BSP_ERR_INVALID && !a);
+    o.max_leaf_prims = 0;
+    o.octree_split = (bsp_octree_split)7; /* neither centre nor cost */
+    CHECK(bsp_accel_build(s, &o, &a, &err) == BSP_ERR_INVALID && !a);
+    CHECK_STR_CONTAINS(err.message, "octree split 7 is not one of 0, 1");
+    o.octree_split = BSP_OCTREE_CENTRE;
     a = octree_of(s, 3, 1);
     char path[] = "/tmp/bspray-octree-XXXXXX";
     int fd = mkstemp(path);
@@ -373,15 +387,7 @@ TEST(cli_bench_paper_gives_an_octree_the_papers_depth_in_kd_levels)
              harness_cli(), csv);
     CHECK_RUN(cmd, 0, "octree-cost");
     bsp_scene *s = havran_test_scene("spd:balls:2");
-    bsp_build_options o;
-    bsp_build_options_defaults(&o);
-    o.kind = BSP_ACCEL_OCTREE;
-    o.octree_split = BSP_OCTREE_COST;
-    o.max_depth = 6;
-    o.max_leaf_prims = 2;
-    bsp_accel *a = NULL;
-    bsp_error err;
-    REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+    bsp_accel *a = octree_built(s, 6, 2, 1, BSP_OCTREE_COST);
     bsp_tree_stats st;
     bsp_accel_tree_stats(a, &st);
     FILE *f = fopen(csv, "r");
