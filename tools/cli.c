@@ -204,11 +204,19 @@ static void parse_method(args *a, const char *name, accel_method *m)
     bsp_error err;
     m->variant = 0;
     if (bsp_accel_kind_parse(name, &m->kind, &err) != BSP_OK) {
-        /* the library's message lists its kinds; the variants are the CLI's */
-        char *close = strrchr(err.message, ')');
-        if (close)
-            *close = 0;
-        die_usage(a->usage, "%s, octree-cost, grid-bounds)", err.message);
+        /* the library's message lists its kinds ("... (known: a, b)"); the
+         * variants are the CLI's, added before its closing parenthesis */
+        char msg[sizeof err.message + 64];
+        snprintf(msg, sizeof msg, "%s", err.message);
+        char *close = strrchr(msg, ')');
+        size_t len = close ? (size_t)(close - msg) : strlen(msg);
+        /* room: err.message's length, and 64 bytes for the names added */
+        for (size_t i = 0; i < sizeof variant_names / sizeof *variant_names && len < sizeof msg;
+             i++)
+            len += (size_t)snprintf(msg + len, sizeof msg - len, ", %s", variant_names[i].name);
+        if (len < sizeof msg)
+            snprintf(msg + len, sizeof msg - len, ")");
+        die_usage(a->usage, "%s", msg);
     }
 }
 
@@ -599,11 +607,11 @@ void apply_subdivision_args(const bsp_build_options *from, bsp_build_options *to
 
 const char *method_label(const bsp_build_options *o)
 {
-    if (o->kind == BSP_ACCEL_OCTREE && o->octree_split == BSP_OCTREE_COST)
-        return "octree-cost";
-    if (o->kind == BSP_ACCEL_GRID && o->grid_assign_bounds)
-        return "grid-bounds";
-    return bsp_accel_kind_name(o->kind);
+    /* the variant apply_method makes, read back from the options */
+    const accel_method m = {o->kind, (o->kind == BSP_ACCEL_OCTREE &&
+                                      o->octree_split == BSP_OCTREE_COST) ||
+                                         (o->kind == BSP_ACCEL_GRID && o->grid_assign_bounds)};
+    return accel_method_name(&m);
 }
 
 const char *accel_label(const bsp_accel *accel)
