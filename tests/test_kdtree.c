@@ -48,13 +48,14 @@ static void collect_planes(const bsp_accel *a, plane_list *pl, int limit)
     if (bsp_accel_get_kind(a) == BSP_ACCEL_NAIVE)
         return;
     if (bsp_accel_get_kind(a) == BSP_ACCEL_GRID) {
-        const grid *g = a->impl;
-        for (unsigned k = 0; k < 3; k++)
-            for (int i = 0; i <= g->res[k] && pl->n < limit; i++) {
-                pl->axis[pl->n] = k;
-                pl->value[pl->n] = grid_plane(g, k, i);
-                pl->n++;
-            }
+        const grid *g = a->impl; /* every grid's planes, the subgrids' too */
+        for (uint32_t s = 0; s < g->nsubs; s++)
+            for (unsigned k = 0; k < 3; k++)
+                for (int i = 0; i <= g->subs[s].res[k] && pl->n < limit; i++) {
+                    pl->axis[pl->n] = k;
+                    pl->value[pl->n] = grid_plane(&g->subs[s], k, i);
+                    pl->n++;
+                }
         return;
     }
     const kd_tree *t = a->impl;
@@ -140,18 +141,22 @@ static int quick_skips_view_variant(const bsp_scene *scene, int kind, int mailbo
  * uniform grid and the octree, with and without mailboxes, sah-mixed's three
  * models among them (sampled without mailboxes, surface and counted with
  * them), each sah-mixed tree kept whatever its check against sah would
- * choose, and the octree also cut by its cost estimate (with mailboxes).
- * Fills O[0..n), returns n (at most KD_VARIANTS_MAX). */
-#define KD_VARIANTS_MAX (2 * BSP_ACCEL_KIND_COUNT + 2)
+ * choose, the octree also cut by its cost estimate (with mailboxes), and a
+ * recursive grid (three levels, cells of more than 4 primitives cut; no
+ * mailboxes, so that the skip of the best hit's primitive works across
+ * nested grids). Fills O[0..n), returns n (at most KD_VARIANTS_MAX). */
+#define KD_VARIANTS_MAX (2 * BSP_ACCEL_KIND_COUNT + 3)
 static int kd_variants(bsp_build_options *o)
 {
     int n = 0;
     for (int k = BSP_ACCEL_KAPLAN; k < BSP_ACCEL_KIND_COUNT; k++) {
-        int nv = k == BSP_ACCEL_SAH_MIXED || k == BSP_ACCEL_OCTREE ? 3 : 2;
+        int nv = k == BSP_ACCEL_SAH_MIXED || k == BSP_ACCEL_OCTREE || k == BSP_ACCEL_GRID ? 3 : 2;
         for (int v = 0; v < nv; v++) {
             bsp_build_options_defaults(&o[n]);
             o[n].kind = (bsp_accel_kind)k;
-            o[n].mailbox = v > 0;
+            o[n].mailbox = v > 0 && !(k == BSP_ACCEL_GRID && v == 2);
+            o[n].grid_levels = k == BSP_ACCEL_GRID && v == 2 ? 3 : 1;
+            o[n].grid_cell_prims = 4;
             /* without mailboxes, the plain model's tree (with them, the
              * mailbox term's: the default either way) */
             o[n].sah_straddle_twice = v == 0;

@@ -257,7 +257,7 @@ long bench_validate(const bsp_accel *accel, const bsp_accel *naive, const bsp_sc
 /* --- the benchmark ---------------------------------------------------------------- */
 
 /* every kind, and the variants' names (accel_method) */
-#define BENCH_MAX_METHODS (BSP_ACCEL_KIND_COUNT + 2)
+#define BENCH_MAX_METHODS (BSP_ACCEL_KIND_COUNT + ACCEL_VARIANTS)
 
 typedef struct bench_opts {
     bench_cmdline cl; /* repeat: timed renders per figure; T_TR is the best */

@@ -46,7 +46,7 @@ const char *const bench_scaling_default_scenes[] = {
 #define SCALING_BIG_PRIMS 500000
 #define SCALING_BIG_REPEAT 2
 
-#define MAX_KINDS (BSP_ACCEL_KIND_COUNT + 2) /* every kind, and the variants' names */
+#define MAX_KINDS (BSP_ACCEL_KIND_COUNT + ACCEL_VARIANTS) /* every kind, and the variants' names */
 
 typedef struct scaling_opts {
     accel_method kinds[MAX_KINDS];

@@ -3,6 +3,7 @@
  */
 #include <errno.h>
 #include <inttypes.h>
+#include <limits.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -169,36 +170,76 @@ bsp_accel *build_accel(const bsp_scene *scene, const bsp_build_options *opts)
     return accel;
 }
 
-/* The names of the variants (accel_method), by kind. */
+/* The variants (accel_method.variant is 1 + the index here): a name, the
+ * kind, and the option that makes it. */
+typedef enum { VARIANT_OCTREE_COST, VARIANT_GRID_BOUNDS, VARIANT_GRID_REC } variant_id;
 static const struct {
     const char *name;
     bsp_accel_kind kind;
-} variant_names[] = {{"octree-cost", BSP_ACCEL_OCTREE}, {"grid-bounds", BSP_ACCEL_GRID}};
+    variant_id id;
+} variant_names[] = {{"octree-cost", BSP_ACCEL_OCTREE, VARIANT_OCTREE_COST},
+                     {"grid-bounds", BSP_ACCEL_GRID, VARIANT_GRID_BOUNDS},
+                     {"grid-rec", BSP_ACCEL_GRID, VARIANT_GRID_REC}};
+#define VARIANTS (sizeof variant_names / sizeof *variant_names)
 
 void apply_method(const accel_method *m, bsp_build_options *o)
 {
     o->kind = m->kind;
-    if (m->variant && m->kind == BSP_ACCEL_OCTREE)
+    if (m->variant <= 0 || (size_t)m->variant > VARIANTS)
+        return;
+    switch (variant_names[m->variant - 1].id) {
+    case VARIANT_OCTREE_COST:
         o->octree_split = BSP_OCTREE_COST;
-    else if (m->variant && m->kind == BSP_ACCEL_GRID)
+        break;
+    case VARIANT_GRID_BOUNDS:
         o->grid_assign_bounds = 1;
+        break;
+    case VARIANT_GRID_REC:
+        if (o->grid_levels <= 1)
+            o->grid_levels = GRID_REC_LEVELS;
+        break;
+    }
 }
 
 const char *accel_method_name(const accel_method *m)
 {
-    for (size_t i = 0; m->variant && i < sizeof variant_names / sizeof *variant_names; i++)
-        if (variant_names[i].kind == m->kind)
-            return variant_names[i].name;
+    if (m->variant > 0 && (size_t)m->variant <= VARIANTS)
+        return variant_names[m->variant - 1].name;
     return bsp_accel_kind_name(m->kind);
+}
+
+/* The variant whose option O carries (0: none), so that a table names it
+ * as --accel would. */
+static int variant_of(const bsp_build_options *o)
+{
+    for (size_t i = 0; i < VARIANTS; i++) {
+        if (variant_names[i].kind != o->kind)
+            continue;
+        int has = 0;
+        switch (variant_names[i].id) {
+        case VARIANT_OCTREE_COST:
+            has = o->octree_split == BSP_OCTREE_COST;
+            break;
+        case VARIANT_GRID_BOUNDS:
+            has = o->grid_assign_bounds && o->grid_levels <= 1;
+            break;
+        case VARIANT_GRID_REC:
+            has = o->grid_levels > 1;
+            break;
+        }
+        if (has)
+            return (int)i + 1;
+    }
+    return 0;
 }
 
 /* NAME as a method into *M, or a usage error listing every name. */
 static void parse_method(args *a, const char *name, accel_method *m)
 {
-    for (size_t i = 0; i < sizeof variant_names / sizeof *variant_names; i++)
+    for (size_t i = 0; i < VARIANTS; i++)
         if (!strcmp(name, variant_names[i].name)) {
             m->kind = variant_names[i].kind;
-            m->variant = 1;
+            m->variant = (int)i + 1;
             return;
         }
     bsp_error err;
@@ -211,8 +252,7 @@ static void parse_method(args *a, const char *name, accel_method *m)
         char *close = strrchr(msg, ')');
         size_t len = close ? (size_t)(close - msg) : strlen(msg);
         /* room: err.message's length, and 64 bytes for the names added */
-        for (size_t i = 0; i < sizeof variant_names / sizeof *variant_names && len < sizeof msg;
-             i++)
+        for (size_t i = 0; i < VARIANTS && len < sizeof msg; i++)
             len += (size_t)snprintf(msg + len, sizeof msg - len, ", %s", variant_names[i].name);
         if (len < sizeof msg)
             snprintf(msg + len, sizeof msg - len, ")");
@@ -574,6 +614,12 @@ static void parse_grid_res(args *a, const char *opt, int res[3])
     "  --grid-assign clipped|bounds  grid: a primitive goes in the cells its part reaches\n"    \
     "                     (clipped, default) or in every cell its bounds overlap (bounds:\n"     \
     "                     Havran's 1999 grids; see docs/grid.md)\n"                        \
+    "  --grid-levels L    grid: 1 (default) uniform; 2..8 a recursive grid of at most L\n"    \
+    "                     grids nested (Jevans and Wyvill): a cell listing more than\n"       \
+    "                     --grid-cell-prims primitives gets a grid of its own, at the\n"      \
+    "                     same density over them (grid-rec: L = 2)\n"                         \
+    "  --grid-cell-prims T  recursive grid: cut the cells that list more than T\n"            \
+    "                     primitives (default 8)\n"                                           \
     "  --octree-split centre|cost  octree: cut each node at the centre of its box\n"       \
     "                     (default) or, on each axis, at the least of a cost estimate\n"   \
     "                     between the centre and the median of its primitives (the\n"     \
@@ -589,6 +635,10 @@ int parse_subdivision_arg(args *a, bsp_build_options *opts)
         opts->grid_assign_bounds = parse_one_of_two(a, s, "clipped", "bounds");
     else if (!strcmp(s, "--grid-res"))
         parse_grid_res(a, s, opts->grid_res);
+    else if (!strcmp(s, "--grid-levels"))
+        opts->grid_levels = parse_int(a, s, 1, BSP_GRID_MAX_LEVELS);
+    else if (!strcmp(s, "--grid-cell-prims"))
+        opts->grid_cell_prims = parse_int(a, s, 1, INT_MAX);
     else if (!strcmp(s, "--octree-split"))
         opts->octree_split =
             parse_one_of_two(a, s, "centre", "cost") ? BSP_OCTREE_COST : BSP_OCTREE_CENTRE;
@@ -602,15 +652,15 @@ void apply_subdivision_args(const bsp_build_options *from, bsp_build_options *to
     to->grid_density = from->grid_density;
     memcpy(to->grid_res, from->grid_res, sizeof to->grid_res);
     to->grid_assign_bounds = from->grid_assign_bounds;
+    to->grid_levels = from->grid_levels;
+    to->grid_cell_prims = from->grid_cell_prims;
     to->octree_split = from->octree_split;
 }
 
 const char *method_label(const bsp_build_options *o)
 {
     /* the variant apply_method makes, read back from the options */
-    const accel_method m = {o->kind, (o->kind == BSP_ACCEL_OCTREE &&
-                                      o->octree_split == BSP_OCTREE_COST) ||
-                                         (o->kind == BSP_ACCEL_GRID && o->grid_assign_bounds)};
+    const accel_method m = {o->kind, variant_of(o)};
     return accel_method_name(&m);
 }
 
@@ -625,9 +675,13 @@ void cells_variant_json(FILE *f, const char *indent, const bsp_accel *accel)
 {
     bsp_build_options o;
     bsp_accel_get_options(accel, &o);
-    if (o.kind == BSP_ACCEL_GRID)
+    if (o.kind == BSP_ACCEL_GRID) {
         fprintf(f, "%s\"grid_assign\": \"%s\",\n", indent,
                 o.grid_assign_bounds ? "bounds" : "clipped");
+        fprintf(f, "%s\"grid_levels\": %d,\n", indent, o.grid_levels);
+        if (o.grid_levels > 1)
+            fprintf(f, "%s\"grid_cell_prims\": %d,\n", indent, o.grid_cell_prims);
+    }
     else if (o.kind == BSP_ACCEL_OCTREE)
         fprintf(f, "%s\"octree_split\": \"%s\",\n", indent,
                 o.octree_split == BSP_OCTREE_COST ? "cost" : "centre");

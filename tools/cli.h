@@ -44,10 +44,14 @@ int is_help(const char *s);
 void take_operand(args *a, const char **operand);
 /* A vector "x,y,z" as the value of OPT, or a usage error. */
 bsp_vec3 parse_vec3(args *a, const char *opt);
-/* A method of --accel: a kind, and whether it was named as the variant of
- * its kind that an option makes (VARIANT 1: "octree-cost", the octree with
- * --octree-split cost; "grid-bounds", the grid with --grid-assign bounds),
- * the names method_label gives them in tables. */
+/* A method of --accel: a kind, and whether it was named as a variant of
+ * its kind that an option makes (VARIANT 0: the kind itself; else one of
+ * "octree-cost", the octree with --octree-split cost; "grid-bounds", the
+ * grid with --grid-assign bounds; "grid-rec", the recursive grid of
+ * GRID_REC_LEVELS levels unless --grid-levels says more), the names
+ * method_label gives them in tables. */
+#define ACCEL_VARIANTS 3
+#define GRID_REC_LEVELS 2
 typedef struct accel_method {
     bsp_accel_kind kind;
     int variant;

@@ -52,6 +52,10 @@ typedef enum bsp_accel_kind {
 #define BSP_GRID_DEFAULT_DENSITY 4.0
 #define BSP_GRID_MAX_RES 4096
 #define BSP_GRID_MAX_CELLS ((uint64_t)1 << 27)
+/* A recursive grid's most nested grids, and the default primitives a cell
+ * may list before a subgrid cuts it. */
+#define BSP_GRID_MAX_LEVELS 8
+#define BSP_GRID_DEFAULT_CELL_PRIMS 8
 
 /* Hard ceiling of kd-tree depth (it sizes the traversal stack). */
 #define BSP_KD_MAX_DEPTH_LIMIT 64
@@ -193,6 +197,16 @@ typedef struct bsp_build_options {
                               Havran's 1999 grids did */
     bsp_octree_split octree_split; /* octree: where a node is cut (default
                               BSP_OCTREE_CENTRE) */
+    int grid_levels;       /* grid: 1 (0: the default) a uniform grid; L > 1 a recursive
+                              grid (Jevans and Wyvill 1989) of at most L grids nested: a
+                              cell listing more than grid_cell_prims primitives (and
+                              fewer than its grid) gets a grid of its own over its box;
+                              every grid's resolution about grid_density cells per
+                              primitive it holds, by Klimaszewski's heterogeneous rule
+                              (docs/grid.md). At most BSP_GRID_MAX_LEVELS */
+    int grid_cell_prims;   /* recursive grid: a cell listing more primitives than this is
+                              cut by a subgrid; 0: the default
+                              (BSP_GRID_DEFAULT_CELL_PRIMS) */
     void (*progress)(double done, void *ctx); /* NULL (default), or called now and then on
                               the thread that calls bsp_accel_build with the share of the
                               tree built, in [0, 1], and with 1 when the build is done.

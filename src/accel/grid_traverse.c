@@ -21,38 +21,38 @@
 #include "accel/grid.h"
 #include "geom/vec.h"
 
-/* The walk's state: the cell C, its exits TNEXT per axis, the steps. */
+/* The walk's state in one grid: the cell C, its exits TNEXT per axis, the
+ * steps. */
 typedef struct dda {
     int c[3], step[3];
     double tnext[3];
-    double t_end; /* where the ray's segment in the box ends */
+    double t_end; /* where the ray's segment in the grid's box ends */
 } dda;
 
-/* The t where the ray leaves cell C on axis K (it moves along K). */
-static inline double exit_t(const grid *g, const double o[3], const double d[3], const dda *w,
+/* The t where the ray leaves cell C of grid S on axis K (it moves along K). */
+static inline double exit_t(const subgrid *s, const double o[3], const double d[3], const dda *w,
                             unsigned k)
 {
     int i = w->c[k] + (w->step[k] > 0);
-    return (grid_plane(g, k, i) - o[k]) / d[k];
+    return (grid_plane(s, k, i) - o[k]) / d[k];
 }
 
-/* Clips the ray to the grid's box and sets up the walk; 0 when the ray
- * misses the box. */
-static int dda_start(const grid *g, const bsp_ray *ray, const double o[3], const double d[3],
+/* Clips the ray's [T0, T1] to grid S's box and sets up the walk; 0 when
+ * the ray misses the box. */
+static int dda_start(const subgrid *s, double t0, double t1, const double o[3], const double d[3],
                      dda *w)
 {
-    double t0 = ray->tmin, t1 = ray->tmax;
-    if (!line_clip_box(o, d, &g->box, &t0, &t1))
+    if (!line_clip_box(o, d, &s->box, &t0, &t1))
         return 0;
     if (!(t0 <= t1))
         return 0;
     w->t_end = t1;
     for (unsigned k = 0; k < 3; k++) {
-        w->c[k] = grid_cell_of(g, k, o[k] + d[k] * t0);
+        w->c[k] = grid_cell_of(s, k, o[k] + d[k] * t0);
         w->step[k] = d[k] > 0.0 ? 1 : d[k] < 0.0 ? -1 : 0;
         /* (a subnormal d may make a crossing infinite: such an axis is
          * stepped at most once, and the ray hardly moves along it) */
-        w->tnext[k] = w->step[k] ? exit_t(g, o, d, w, k) : INFINITY;
+        w->tnext[k] = w->step[k] ? exit_t(s, o, d, w, k) : INFINITY;
     }
     return 1;
 }
@@ -65,129 +65,189 @@ static inline unsigned exit_axis(const dda *w)
     return w->tnext[2] < w->tnext[k] ? 2 : k;
 }
 
-/* Moves to the next cell across axis K; 0 when the ray leaves the box. */
-static inline int dda_step(const grid *g, const double o[3], const double d[3], dda *w,
+/* Moves to the next cell of grid S across axis K; 0 when the ray leaves
+ * the grid's box. */
+static inline int dda_step(const subgrid *s, const double o[3], const double d[3], dda *w,
                            unsigned k)
 {
     if (w->tnext[k] > w->t_end)
         return 0;
     w->c[k] += w->step[k];
-    if (w->c[k] < 0 || w->c[k] >= g->res[k])
+    if (w->c[k] < 0 || w->c[k] >= s->res[k])
         return 0;
-    w->tnext[k] = exit_t(g, o, d, w, k);
+    w->tnext[k] = exit_t(s, o, d, w, k);
     return 1;
 }
 
-/* A query's start on grid G of scene S: the ray's origin O and direction
- * D, the walk W, and the mailbox's stamp for this ray (FROM, the primitive
- * left out, already stamped). -1: the ray lies outside the precision
- * domain (the naive method answers it); 0: it misses the grid; 1: walk. */
-static int walk_begin(const grid *g, const bsp_scene *s, bsp_query *q, const bsp_ray *ray,
-                      uint32_t from, double o[3], double d[3], dda *w, uint32_t *stamp)
+/* One query's state, shared by the walks of the nested grids. */
+typedef struct walk {
+    const grid *g;
+    const bsp_scene *s;
+    const bsp_ray *ray;
+    double o[3], d[3];
+    isect_ray r;
+    uint32_t *mbox, stamp, from;
+    /* closest hit: tmax follows the best hit, and at equal t the lower index
+     * wins, as in the kd-trees' loop (kd_traverse.c) */
+    double tmax;
+    scene_isect_hit best;
+    uint32_t best_p;
+    int found; /* any hit: one was found */
+    uint64_t cut, cells, nonempty, refs, tests;
+} walk;
+
+/* A query's start on grid G of scene S: the ray's origin and direction,
+ * and the mailbox's stamp for this ray (FROM, the primitive left out,
+ * already stamped). -1: the ray lies outside the precision domain (the
+ * naive method answers it); 0: nothing to walk; 1: walk. */
+static int walk_begin(walk *w, const grid *g, const bsp_scene *s, bsp_query *q,
+                      const bsp_ray *ray, uint32_t from)
 {
+    w->g = g;
+    w->s = s;
+    w->ray = ray;
+    w->from = from;
     for (unsigned k = 0; k < 3; k++) {
-        o[k] = ray->org.v[k];
-        d[k] = ray->dir.v[k];
+        w->o[k] = ray->org.v[k];
+        w->d[k] = ray->dir.v[k];
     }
-    if (!scene_ray_in_domain(s, o, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]))
+    if (!scene_ray_in_domain(s, w->o, w->d[0] * w->d[0] + w->d[1] * w->d[1] + w->d[2] * w->d[2]))
         return -1;
-    if (g->nrefs == 0 || !dda_start(g, ray, o, d, w))
+    if (g->nrefs == 0)
         return 0;
-    *stamp = query_mailbox_next(q, s->nprims);
-    if (q->stamp && from < s->nprims)
-        q->stamp[from] = *stamp;
+    w->stamp = query_mailbox_next(q, s->nprims);
+    w->mbox = q->stamp;
+    if (w->mbox && from < s->nprims)
+        w->mbox[from] = w->stamp;
+    isect_ray_init(&w->r, ray, s->hit_tol); /* in the domain: checked */
+    w->tmax = ray->tmax;
+    w->best = (scene_isect_hit){INFINITY, 0.0, 0.0, 1.0};
+    w->best_p = BSP_NO_PRIM;
+    w->found = 0;
+    w->cut = w->cells = w->nonempty = w->refs = w->tests = 0;
     return 1;
+}
+
+/* Tests cell C's list for the closest hit. */
+static inline void closest_in_cell(walk *w, uint64_t c)
+{
+    const grid *g = w->g;
+    const uint32_t *list = g->prims + g->start[c], *end = g->prims + g->start[c + 1];
+    w->cells++;
+    w->nonempty += list != end;
+    w->refs += (uint64_t)(end - list);
+    scene_isect_hit h;
+    for (; list != end; list++) {
+        const uint32_t p = *list;
+        if (w->mbox) {
+            if (w->mbox[p] == w->stamp)
+                continue;
+            w->mbox[p] = w->stamp;
+        } else if (p == w->from || p == w->best_p) {
+            continue;
+        }
+        w->tests++;
+        if (scene_isect(w->s, p, &w->r, w->tmax, &h) && (h.t < w->best.t || p < w->best_p)) {
+            w->best = h;
+            w->best_p = p;
+            w->tmax = h.t;
+        }
+    }
+}
+
+/* Walks grid S (and the grids below it) for the closest hit; 1 once it is
+ * found (the best hit lies at or before the current cell's exit: every
+ * primitive hit there is listed in a cell visited so far), 0 when the ray
+ * leaves S's box first. */
+static int closest_in_grid(walk *w, const subgrid *s)
+{
+    const grid *g = w->g;
+    dda it;
+    if (!dda_start(s, w->ray->tmin, w->ray->tmax, w->o, w->d, &it))
+        return 0;
+    for (;;) {
+        const uint64_t c = grid_cell_index(s, it.c);
+        if (g->child && g->child[c]) {
+            w->cut++;
+            if (closest_in_grid(w, &g->subs[g->child[c]]))
+                return 1;
+        } else {
+            closest_in_cell(w, c);
+        }
+        const unsigned k = exit_axis(&it);
+        if (w->best.t <= it.tnext[k])
+            return 1;
+        if (!dda_step(s, w->o, w->d, &it, k))
+            return 0;
+    }
+}
+
+/* Tests cell C's list for any hit. */
+static inline void any_in_cell(walk *w, uint64_t c)
+{
+    const grid *g = w->g;
+    const uint32_t *list = g->prims + g->start[c], *end = g->prims + g->start[c + 1];
+    w->cells++;
+    w->nonempty += list != end;
+    scene_isect_hit h;
+    for (; list != end && !w->found; list++) {
+        const uint32_t p = *list;
+        w->refs++;
+        if (w->mbox) {
+            if (w->mbox[p] == w->stamp)
+                continue;
+            w->mbox[p] = w->stamp;
+        } else if (p == w->from) {
+            continue;
+        }
+        w->tests++;
+        w->found = scene_isect(w->s, p, &w->r, w->ray->tmax, &h);
+    }
+}
+
+/* Walks grid S (and the grids below it) until any hit is found. */
+static void any_in_grid(walk *w, const subgrid *s)
+{
+    const grid *g = w->g;
+    dda it;
+    if (!dda_start(s, w->ray->tmin, w->ray->tmax, w->o, w->d, &it))
+        return;
+    do {
+        const uint64_t c = grid_cell_index(s, it.c);
+        if (g->child && g->child[c]) {
+            w->cut++;
+            any_in_grid(w, &g->subs[g->child[c]]);
+        } else {
+            any_in_cell(w, c);
+        }
+    } while (!w->found && dda_step(s, w->o, w->d, &it, exit_axis(&it)));
 }
 
 int grid_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
                    bsp_hit *hit)
 {
     const grid *g = a->impl;
-    const bsp_scene *s = a->scene;
-    double o[3], d[3];
-    dda w;
-    uint32_t stamp = 0;
+    walk w;
     hit->prim = BSP_NO_PRIM;
-    int go = walk_begin(g, s, q, ray, from, o, d, &w, &stamp);
+    int go = walk_begin(&w, g, a->scene, q, ray, from);
     if (go <= 0)
-        return go < 0 ? naive_scene_intersect(s, q, ray, from, hit) : 0;
-    uint32_t *mbox = q->stamp;
-    /* as in the kd-trees' loop (kd_traverse.c): tmax follows the best hit,
-     * and at equal t the lower index wins */
-    isect_ray r;
-    isect_ray_init(&r, ray, s->hit_tol); /* in the domain: checked */
-    double tmax = ray->tmax;
-    scene_isect_hit best = {INFINITY, 0.0, 0.0, 1.0}, h;
-    uint32_t best_p = BSP_NO_PRIM;
-    uint64_t cells = 0, nonempty = 0, refs = 0, tests = 0;
-    for (;;) {
-        const uint64_t c = grid_cell_index(g, w.c);
-        const uint32_t *list = g->prims + g->start[c], *end = g->prims + g->start[c + 1];
-        cells++;
-        nonempty += list != end;
-        refs += (uint64_t)(end - list);
-        for (; list != end; list++) {
-            const uint32_t p = *list;
-            if (mbox) {
-                if (mbox[p] == stamp)
-                    continue;
-                mbox[p] = stamp;
-            } else if (p == from || p == best_p) {
-                continue;
-            }
-            tests++;
-            if (scene_isect(s, p, &r, tmax, &h) && (h.t < best.t || p < best_p)) {
-                best = h;
-                best_p = p;
-                tmax = h.t;
-            }
-        }
-        const unsigned k = exit_axis(&w);
-        if (best.t <= w.tnext[k] || !dda_step(g, o, d, &w, k))
-            break; /* the closest hit lies in this cell, or the ray leaves the box */
-    }
-    query_count(q, 0, cells, 0, nonempty, refs, tests);
-    if (best_p == BSP_NO_PRIM)
+        return go < 0 ? naive_scene_intersect(a->scene, q, ray, from, hit) : 0;
+    (void)closest_in_grid(&w, &g->subs[0]);
+    query_count(q, w.cut, w.cells, 0, w.nonempty, w.refs, w.tests);
+    if (w.best_p == BSP_NO_PRIM)
         return 0;
-    scene_hit_finish(&best, best_p, hit);
+    scene_hit_finish(&w.best, w.best_p, hit);
     return 1;
 }
 
 int grid_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from)
 {
     const grid *g = a->impl;
-    const bsp_scene *s = a->scene;
-    double o[3], d[3];
-    dda w;
-    uint32_t stamp = 0;
-    int go = walk_begin(g, s, q, ray, from, o, d, &w, &stamp);
+    walk w;
+    int go = walk_begin(&w, g, a->scene, q, ray, from);
     if (go <= 0)
-        return go < 0 ? naive_scene_occluded(s, q, ray, from) : 0;
-    uint32_t *mbox = q->stamp;
-    isect_ray r;
-    isect_ray_init(&r, ray, s->hit_tol);
-    scene_isect_hit h;
-    int found = 0;
-    uint64_t cells = 0, nonempty = 0, refs = 0, tests = 0;
-    do {
-        const uint64_t c = grid_cell_index(g, w.c);
-        const uint32_t *list = g->prims + g->start[c], *end = g->prims + g->start[c + 1];
-        cells++;
-        nonempty += list != end;
-        for (; list != end && !found; list++) {
-            const uint32_t p = *list;
-            refs++;
-            if (mbox) {
-                if (mbox[p] == stamp)
-                    continue;
-                mbox[p] = stamp;
-            } else if (p == from) {
-                continue;
-            }
-            tests++;
-            found = scene_isect(s, p, &r, ray->tmax, &h);
-        }
-    } while (!found && dda_step(g, o, d, &w, exit_axis(&w)));
-    query_count(q, 0, cells, 0, nonempty, refs, tests);
-    return found;
+        return go < 0 ? naive_scene_occluded(a->scene, q, ray, from) : 0;
+    any_in_grid(&w, &g->subs[0]);
+    query_count(q, w.cut, w.cells, 0, w.nonempty, w.refs, w.tests);
+    return w.found;
 }
