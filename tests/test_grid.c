@@ -121,7 +121,8 @@ typedef struct havran_grid {
 
 /* His resolutions where his figures and ours, both by bounds, agree to
  * rounding (the others differ by how a primitive lying in a cell's face is
- * assigned, or by his gears' and teapot's polygons: docs/grid.md) */
+ * assigned, or by his gears' polygons: docs/grid.md). His teapot is the SPD
+ * Readme's, size factor 12. */
 static const havran_grid havran[] = {
     {"balls", {46, 46, 3}, 6348, 4208, 10240},
     {"balls", {103, 103, 7}, 74263, 63393, 19966},
@@ -137,6 +138,8 @@ static const havran_grid havran[] = {
     {"rings", {21, 20, 21}, 8820, 6264, 27666},
     {"rings", {60, 60, 60}, 216000, 178930, 127217},
     {"tetra", {35, 35, 35}, 42875, 37311, 35936},
+    {"teapot:12", {28, 29, 11}, 8932, 7226, 22982},
+    {"teapot:12", {80, 80, 30}, 192000, 175514, 75105},
 };
 
 /* The SPD database NAME generated in code (no ../shared needed). */

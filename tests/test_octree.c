@@ -293,10 +293,11 @@ TEST(octree_matches_havrans_nodes_and_references)
 {
     /* where his octree and ours cut the same box at the same centres and
      * list by the same bounds: lattice, and balls at depth 4, to the cell
-     * (N_IN and N_EV his, so N_V too); balls and tree deeper, and rings,
-     * up to the padding of a primitive's bounds (ours lists a primitive
-     * touching a plane on both sides). tetra, whose faces lie on the centre
-     * planes, and gears' polygons differ (docs/octree.md). */
+     * (N_IN and N_EV his, so N_V too); balls and tree deeper, rings, and
+     * teapot (the Readme's size 12) at depth 4, up to the padding of a
+     * primitive's bounds (ours lists a primitive touching a plane on both
+     * sides). tetra, whose faces lie on the centre planes, and gears'
+     * polygons differ (docs/octree.md). */
     static const octree_figures exact[] = {
         {"spd:lattice", 4, 585, 4096, 0, 22112},
         {"spd:lattice", 5, 4681, 32768, 7744, 49600},
@@ -305,6 +306,7 @@ TEST(octree_matches_havrans_nodes_and_references)
     static const octree_figures near[] = {
         {"spd:balls", 5, 117, 820, 570, 10946},    {"spd:balls", 7, 1108, 7757, 2905, 27288},
         {"spd:tree", 7, 352, 2465, 1801, 13725},   {"spd:rings", 6, 6925, 48476, 10281, 133929},
+        {"spd:teapot:12", 4, 227, 1590, 777, 18845}, /* his teapot: the Readme's size 12 */
     };
     check_havran_octrees(exact, sizeof exact / sizeof *exact, BSP_OCTREE_CENTRE, 0.0, 0.0, 0.07);
     check_havran_octrees(near, sizeof near / sizeof *near, BSP_OCTREE_CENTRE, 0.01, 0.03, 0.07);

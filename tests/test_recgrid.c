@@ -4,15 +4,21 @@
  * kd-trees (test_kdtree.c, a variant of three levels): which cells are cut
  * and how, checked against a scene whose grids are worked out by hand; the
  * walk's counts on rays through a cut cell, also worked out by hand; that
- * one level is the uniform grid; the refusals and the size limit; and the
- * command line's names for it.
+ * one level is the uniform grid; the refusals and the size limit; the
+ * command line's names for it; and Havran's recursive grids of tetra
+ * (../shared/reference/havran_stats_grids.txt, "Recursive Grid", RHT +),
+ * which come out to the cell, with `bspray bench --grids --grid-kind
+ * recursive`, which prints them beside his.
  */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "bspray/bspray.h"
 #include "harness.h"
+#include "havran_test_util.h"
 
 /* The hand-made scene: a box of about [-4, 4]^3, made by a sphere of
  * radius 0.1 at (-3.9, -3.9, -3.9) and one of radius 1 at (3, 3, 3); and
@@ -319,4 +325,98 @@ TEST(recgrid_is_named_grid_rec_on_the_command_line)
              harness_cli());
     CHECK_RUN(cmd, 0, "| grid-rec |");
     CHECK_RUN(cmd, 0, "| grid |");
+}
+
+/* Havran's recursive grid of LEVELS levels over tetra, as his: density 1,
+ * cells of more than 8 primitives cut, by bounds, no mailboxes. */
+static bsp_accel *havran_recgrid(const bsp_scene *s, int levels)
+{
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_GRID;
+    o.grid_levels = levels;
+    o.grid_density = 1.0;
+    o.grid_cell_prims = 8;
+    o.grid_assign_bounds = 1;
+    o.mailbox = 0;
+    bsp_accel *a = NULL;
+    bsp_error err;
+    REQUIRE_MSG(bsp_accel_build(s, &o, &a, &err) == BSP_OK, "%s", err.message);
+    CHECK_MSG(bsp_accel_check(a, &err) == BSP_OK, "%s", err.message);
+    return a;
+}
+
+TEST(recgrid_matches_havrans_on_tetra)
+{
+    /* his "Recursive Grid" table, tetra, RHT +: RMD 2: N_IN 1057 (his count
+     * of grids, the root's too), N_V 31768, N_EV 14220, N_OIV 117056; RMD 3:
+     * N_IN 1565, N_V 40404. Per ray of the 513 x 513 depth-4 render at RMD
+     * 2: N_IT 21.32, N_TS 12.29, N_ETS 9.97, N_EETS 6.83 */
+    bsp_scene *s = havran_test_scene("spd:tetra");
+    bsp_accel *two = havran_recgrid(s, 2), *three = havran_recgrid(s, 3);
+    bsp_tree_stats st;
+    bsp_accel_tree_stats(two, &st);
+    CHECK_MSG(st.interior_nodes + 1 == 1057 && st.leaves == 31768 && st.empty_leaves == 14220 &&
+                  st.references == 117056,
+              "grids %llu N_V %llu N_EV %llu N_OIV %llu",
+              (unsigned long long)st.interior_nodes + 1, (unsigned long long)st.leaves,
+              (unsigned long long)st.empty_leaves, (unsigned long long)st.references);
+    bsp_accel_tree_stats(three, &st);
+    CHECK_MSG(st.interior_nodes + 1 == 1565 && st.leaves == 40404, "grids %llu N_V %llu",
+              (unsigned long long)st.interior_nodes + 1, (unsigned long long)st.leaves);
+    bsp_render_options ro;
+    bsp_render_options_defaults(&ro);
+    bsp_image *img = NULL;
+    bsp_render_stats rs;
+    bsp_error err;
+    REQUIRE(bsp_render(two, &ro, &img, &rs, &err) == BSP_OK);
+    bsp_image_destroy(img);
+    havran_test_totals t = havran_test_sum(&rs);
+    REQUIRE(t.rays > 3e5); /* his 309,431 */
+    const double his[4] = {21.32, 12.29, 9.97, 6.83};
+    const double ours[4] = {t.it / t.rays, t.ts / t.rays, t.ets / t.rays, t.eets / t.rays};
+    for (int i = 0; i < 4; i++)
+        CHECK_MSG(fabs(ours[i] / his[i] - 1.0) < 0.04, "figure %d: ours %.2f, his %.2f", i,
+                  ours[i], his[i]);
+    /* a cut cell is a traversal step but no cell traversed */
+    CHECK(t.ts > t.ets);
+    bsp_accel_destroy(two);
+    bsp_accel_destroy(three);
+    bsp_scene_destroy(s);
+}
+
+TEST(cli_bench_grids_reproduces_havrans_recursive_tetra)
+{
+    char dir[] = "/tmp/bspray-recgrids-XXXXXX";
+    REQUIRE(mkdtemp(dir));
+    char csv[256], cmd[768];
+    snprintf(csv, sizeof csv, "%s/r.csv", dir);
+    snprintf(cmd, sizeof cmd,
+             "%s bench --grids spd:tetra --grid-kind recursive --quiet --threads 2 --csv %s 2>&1",
+             harness_cli(), csv);
+    CHECK_RUN(cmd, 0, "| tetra | 2 | 1057 / 1057 | 31768 / 31768 | 14220 / 14220 | "
+                      "117056 / 117056 |");
+    CHECK_RUN(cmd, 0, "| tetra | 3 | 1565 / 1565 | 40404 / 40404 |");
+    FILE *f = fopen(csv, "r");
+    REQUIRE(f);
+    char line[512];
+    int rows = 0;
+    while (fgets(line, sizeof line, f)) {
+        /* scene,levels,grids,grids_havran,...,N_IT (11th),N_IT_havran, ...,
+         * N_IT_clipped_mailboxes (19th) */
+        char *fields[24];
+        int n = havran_test_csv_fields(line, fields, 24);
+        if (n < 20 || strcmp(fields[0], "tetra") != 0)
+            continue;
+        rows++;
+        CHECK(atoi(fields[2]) == atoi(fields[3]));
+        /* clipping and mailboxes take tests off */
+        CHECK(atof(fields[18]) < atof(fields[10]));
+    }
+    fclose(f);
+    CHECK(rows == 2);
+    snprintf(cmd, sizeof cmd, "%s bench --grids --grid-kind octree 2>&1", harness_cli());
+    CHECK_RUN(cmd, 2, "--grid-kind");
+    remove(csv);
+    rmdir(dir);
 }

@@ -138,8 +138,8 @@ long havran_measure_pair(const bsp_accel *his, const bsp_accel *ours, const bsp_
 /* A bench of his tables: its command line (USAGE, MODE_FLAG, HELP; the
  * operands his scenes, --threads, --csv, --quiet, and VARIANT_OPTION when
  * not NULL, which takes one of VARIANT_WORDS and chooses which of his
- * tables), the CSV's header line, the Markdown table's header (its two
- * lines), each variant's caption (a line printed above the table; NULL:
+ * tables), the CSV's header line and the Markdown table's header (its two
+ * lines) of each variant, each variant's caption (a line printed above the table; NULL:
  * none), and EACH, called for every scene with a havran_run as its
  * context, printing its rows. */
 typedef struct havran_run {
@@ -150,7 +150,7 @@ typedef struct havran_run {
 typedef struct havran_bench {
     const char *usage, *mode_flag;
     void (*help)(void);
-    const char *csv_header, *table_header;
+    const char *csv_header[2], *table_header[2]; /* per variant ([1] NULL: [0]'s) */
     havran_scene_fn each;
     const char *variant_option;
     const char *variant_words[2];
@@ -158,5 +158,12 @@ typedef struct havran_bench {
 } havran_bench;
 /* Runs B on the command line ARGC, ARGV; returns the exit status. */
 int havran_bench_main(int argc, char **argv, const havran_bench *b);
+
+/* His recursive grids (bench_recgrids.c), for `bench --grids --grid-kind
+ * recursive`: the table's CSV and Markdown headers, and the rows of one
+ * scene (a havran_scene_fn). */
+extern const char recgrids_csv_header[], recgrids_table_header[];
+int recgrids_of_scene(const char *bare, const char *name, const bsp_scene *scene,
+                      const bsp_accel *naive, void *ctx);
 
 #endif /* BSPRAY_TOOLS_BENCH_H */

@@ -193,12 +193,14 @@ int bench_octrees(int argc, char **argv)
         octrees_usage,
         "--octrees",
         print_help,
-        "scene,depth,N_IN,N_IN_havran,N_V,N_V_havran,N_EV,N_EV_havran,N_OIV,N_OIV_havran,N_IT,"
-        "N_IT_havran,N_TS,N_TS_havran,N_ETS,N_ETS_havran,N_EETS,N_EETS_havran,N_IT_mailboxes,"
-        "validated_rays,split",
-        "| scene | depth | N_IN ours / his | N_V ours / his | N_EV ours / his | N_OIV ours / his "
-        "| N_IT ours / his | full leaves ours / his | N_ETS ours / his | N_EETS ours / his "
-        "| N_IT, mailboxes |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        {"scene,depth,N_IN,N_IN_havran,N_V,N_V_havran,N_EV,N_EV_havran,N_OIV,N_OIV_havran,N_IT,"
+         "N_IT_havran,N_TS,N_TS_havran,N_ETS,N_ETS_havran,N_EETS,N_EETS_havran,N_IT_mailboxes,"
+         "validated_rays,split",
+         NULL},
+        {"| scene | depth | N_IN ours / his | N_V ours / his | N_EV ours / his | N_OIV ours / his "
+         "| N_IT ours / his | full leaves ours / his | N_ETS ours / his | N_EETS ours / his "
+         "| N_IT, mailboxes |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+         NULL},
         octrees_of_scene,
         "--octree-split",
         {"centre", "cost"},
