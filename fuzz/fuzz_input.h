@@ -2,9 +2,10 @@
  * fuzz_input.h — what the fuzz targets share: an input is one format byte
  * and a scene file. The byte's value modulo 3 picks the reader (NFF, OBJ,
  * PLY), its value divided by 3 (modulo 5) the structure the target compares
- * with the naive method (sah, kaplan, sah-per, grid, octree), and for the
- * octree its value divided by 15 (modulo 2) where the nodes are cut (the
- * centre, the cost estimate).
+ * with the naive method (sah, kaplan, sah-per, grid, octree), and its value
+ * divided by 15 (modulo 2) the variant: for the octree where the nodes are
+ * cut (the centre, the cost estimate), for the grid uniform or recursive
+ * (three levels, cells of more than 2 primitives cut).
  */
 #ifndef BSPRAY_FUZZ_INPUT_H
 #define BSPRAY_FUZZ_INPUT_H
@@ -21,10 +22,10 @@
 #define FUZZ_MAX_PRIMS 3000
 
 /* The scene of input D[0..N) (NULL when the reader refuses it, which must
- * come with a message), the kind of structure to compare and, for an
- * octree, its split. */
+ * come with a message), the kind of structure to compare and its variant
+ * (0 or 1). */
 static inline bsp_scene *fuzz_scene(const uint8_t *d, size_t n, bsp_accel_kind *kind,
-                                    bsp_octree_split *split)
+                                    int *variant)
 {
     if (n < 1)
         return NULL;
@@ -32,7 +33,7 @@ static inline bsp_scene *fuzz_scene(const uint8_t *d, size_t n, bsp_accel_kind *
                                             BSP_ACCEL_GRID, BSP_ACCEL_OCTREE};
     int fmt = d[0] % 3;
     *kind = kinds[(d[0] / 3) % 5];
-    *split = (d[0] / 15) % 2 ? BSP_OCTREE_COST : BSP_OCTREE_CENTRE;
+    *variant = (d[0] / 15) % 2;
     const char *buf = (const char *)d + 1;
     bsp_scene *s = NULL;
     bsp_error err = {0};
@@ -56,7 +57,7 @@ static inline bsp_scene *fuzz_scene(const uint8_t *d, size_t n, bsp_accel_kind *
 /* A scene read from an input, with its structure and the naive method. */
 typedef struct fuzz_case {
     bsp_accel_kind kind;
-    bsp_octree_split split;
+    int variant; /* the octree cut by cost; the grid recursive */
     bsp_scene *scene;
     bsp_accel *accel, *naive;
 } fuzz_case;
@@ -65,7 +66,7 @@ typedef struct fuzz_case {
  * (refused, too large, or the structure not built). */
 static inline int fuzz_prepare(const uint8_t *d, size_t n, fuzz_case *c)
 {
-    c->scene = fuzz_scene(d, n, &c->kind, &c->split);
+    c->scene = fuzz_scene(d, n, &c->kind, &c->variant);
     if (!c->scene)
         return 0;
     /* the structure on one thread with a small memory cap (skipped when the
@@ -74,7 +75,9 @@ static inline int fuzz_prepare(const uint8_t *d, size_t n, fuzz_case *c)
     bsp_build_options o, on;
     bsp_build_options_defaults(&o);
     o.kind = c->kind;
-    o.octree_split = c->split;
+    o.octree_split = c->variant ? BSP_OCTREE_COST : BSP_OCTREE_CENTRE;
+    o.grid_levels = c->kind == BSP_ACCEL_GRID && c->variant ? 3 : 1;
+    o.grid_cell_prims = 2;
     o.threads = 1;
     o.max_tree_bytes = (size_t)64 << 20;
     bsp_build_options_defaults(&on);

@@ -23,10 +23,12 @@ make -s build/bspray >/dev/null
 seeds=build-fuzz/seeds
 rm -rf "$seeds" && mkdir -p "$seeds"
 # An input is one byte choosing the reader (value mod 3: NFF, OBJ, PLY) and
-# the structure (value / 3 mod 5: sah, kaplan, sah-per, grid, octree; for
-# the octree value / 15 mod 2: centre or cost split), then the file.
-seed() { # FORMAT FILE NAME: six seeds, one per structure (k 9: the octree cut by cost)
-    for k in 0 1 2 3 4 9; do
+# the structure (value / 3 mod 5: sah, kaplan, sah-per, grid, octree; value
+# / 15 mod 2: for the octree centre or cost split, for the grid uniform or
+# recursive), then the file.
+seed() { # FORMAT FILE NAME: seven seeds, one per structure (k 9: the octree cut by
+    # cost; k 8: the recursive grid)
+    for k in 0 1 2 3 4 8 9; do
         { printf "\\$(printf '%03o' $((k * 3 + $1)))"; cat "$2"; } >"$seeds/$3-$k"
     done
 }
