@@ -38,7 +38,9 @@ typedef enum bsp_accel_kind {
                             rays) and the surface area (all other rays) by their share */
     BSP_ACCEL_GRID,      /* uniform grid (Fujimoto et al. 1986), traversed by a 3D-DDA
                             (Amanatides & Woo 1987): the classic baseline of Havran's
-                            grid statistics; see bsp_build_options.grid_density */
+                            grid statistics; see bsp_build_options.grid_density; or,
+                            with grid_levels > 1, a recursive grid (Jevans and Wyvill
+                            1989) */
     BSP_ACCEL_OCTREE,    /* octree (Glassner 1984), kept as a kd-tree of three levels
                             per octree node and traversed as one; primitives listed by
                             their bounds, as in Havran's 1999 octree statistics; cut
@@ -341,6 +343,10 @@ typedef struct bsp_cell_info {
  * tree of two levels: its box (depth 0, not a leaf, with its low x face as
  * the "split"), then each plane between cells spanning the box (depth 1,
  * not a leaf), then each cell (depth 1, a leaf; in x, then y, then z order).
+ * A recursive grid's cells cut by a grid of their own are not leaves and
+ * are not visited; after the root grid, each such grid, in the order they
+ * were made (breadth first), is visited the same way one level deeper (its
+ * planes spanning its box, then its uncut cells).
  * Returns BSP_ERR_NOMEM when out of memory, else BSP_OK. */
 bsp_status bsp_accel_visit_cells(const bsp_accel *accel, int max_depth,
                                  int (*visit)(const bsp_cell_info *cell, void *ctx), void *ctx,
