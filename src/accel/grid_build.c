@@ -329,7 +329,8 @@ static int add_subgrid(grid_builder *b, const bsp_box *box, const int res[3], in
     g->subs[g->nsubs] = s;
     b->list_at[g->nsubs] = b->queued_n;
     b->list_n[g->nsubs] = n;
-    memcpy(b->queued + b->queued_n, list, n * sizeof *list);
+    if (n)
+        memcpy(b->queued + b->queued_n, list, n * sizeof *list);
     b->queued_n += n;
     g->nsubs++;
     g->ncells += cells;
@@ -425,11 +426,13 @@ static int fill_subgrid(grid_builder *b, uint32_t i)
                     b->over_limit = 1;
                     return 0;
                 }
-                if (!GROW_ARRAY(g->prims, b->prims_cap, g->nrefs + n))
-                    return 0;
-                memcpy(g->prims + g->nrefs, b->sorted + lo, n * sizeof *g->prims);
-                g->nrefs += n;
-                g->nonempty += n != 0;
+                if (n) {
+                    if (!GROW_ARRAY(g->prims, b->prims_cap, g->nrefs + n))
+                        return 0;
+                    memcpy(g->prims + g->nrefs, b->sorted + lo, n * sizeof *g->prims);
+                    g->nrefs += n;
+                    g->nonempty++;
+                }
                 g->start[gc + 1] = (uint32_t)g->nrefs;
             }
     return 1;
