@@ -128,7 +128,13 @@ static int walk_begin(walk *w, const grid *g, const bsp_scene *s, bsp_query *q,
     return 1;
 }
 
-/* Tests cell C's list for the closest hit. */
+/* Tests cell C's list for the closest hit. The walk's state is copied into
+ * locals for the loop and back after it: the kernels read the ray, and the
+ * loop writes the best hit, through the same walk record, which the
+ * compiler must then assume aliased and reload after every test (callgrind,
+ * a 129 x 129 render of balls on the uniform grid: 1,018 M instructions
+ * without the copies, 1,014 M with them, 971 M for the walk before it
+ * handled subgrids). */
 static inline void closest_in_cell(walk *w, uint64_t c)
 {
     const grid *g = w->g;
@@ -136,23 +142,33 @@ static inline void closest_in_cell(walk *w, uint64_t c)
     w->cells++;
     w->nonempty += list != end;
     w->refs += (uint64_t)(end - list);
-    scene_isect_hit h;
+    const isect_ray r = w->r;
+    uint32_t *const mbox = w->mbox;
+    const uint32_t stamp = w->stamp, from = w->from;
+    scene_isect_hit best = w->best, h;
+    uint32_t best_p = w->best_p;
+    double tmax = w->tmax;
+    uint64_t tests = 0;
     for (; list != end; list++) {
         const uint32_t p = *list;
-        if (w->mbox) {
-            if (w->mbox[p] == w->stamp)
+        if (mbox) {
+            if (mbox[p] == stamp)
                 continue;
-            w->mbox[p] = w->stamp;
-        } else if (p == w->from || p == w->best_p) {
+            mbox[p] = stamp;
+        } else if (p == from || p == best_p) {
             continue;
         }
-        w->tests++;
-        if (scene_isect(w->s, p, &w->r, w->tmax, &h) && (h.t < w->best.t || p < w->best_p)) {
-            w->best = h;
-            w->best_p = p;
-            w->tmax = h.t;
+        tests++;
+        if (scene_isect(w->s, p, &r, tmax, &h) && (h.t < best.t || p < best_p)) {
+            best = h;
+            best_p = p;
+            tmax = h.t;
         }
     }
+    w->best = best;
+    w->best_p = best_p;
+    w->tmax = tmax;
+    w->tests += tests;
 }
 
 /* Walks grid S (and the grids below it) for the closest hit; 1 once it is
