@@ -420,3 +420,43 @@ TEST(cli_bench_grids_reproduces_havrans_recursive_tetra)
     remove(csv);
     rmdir(dir);
 }
+
+/* The shares a build reported, in order. */
+typedef struct progress_log {
+    double v[4096];
+    int n;
+} progress_log;
+
+static void log_progress(double done, void *ctx)
+{
+    progress_log *l = ctx;
+    if (l->n < 4096)
+        l->v[l->n++] = done;
+}
+
+TEST(recgrid_build_reports_progress_that_never_goes_back)
+{
+    bsp_scene *s = havran_test_scene("spd:gears");
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_GRID;
+    o.grid_levels = 4;
+    o.grid_cell_prims = 2;
+    static progress_log l;
+    l.n = 0;
+    o.progress = log_progress;
+    o.progress_ctx = &l;
+    bsp_accel *a = NULL;
+    bsp_error err;
+    REQUIRE_MSG(bsp_accel_build(s, &o, &a, &err) == BSP_OK, "%s", err.message);
+    bsp_tree_stats st;
+    bsp_accel_tree_stats(a, &st);
+    /* thousands of grids: reported along the way, then 1 */
+    CHECK_MSG(st.interior_nodes > 1000 && l.n > 2, "N_IN %llu, %d reports",
+              (unsigned long long)st.interior_nodes, l.n);
+    for (int i = 0; i < l.n; i++)
+        CHECK(l.v[i] >= 0.0 && l.v[i] <= 1.0 && (i == 0 || l.v[i] >= l.v[i - 1]));
+    CHECK(l.n > 0 && l.v[l.n - 1] == 1.0);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}

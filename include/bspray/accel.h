@@ -213,7 +213,7 @@ typedef struct bsp_build_options {
                               the thread that calls bsp_accel_build with the share of the
                               tree built, in [0, 1], and with 1 when the build is done.
                               The sah family reports as its subtrees (about a hundred)
-                              are built; a build that makes a second tree (sah-mixed's
+                              are built, a recursive grid as its grids are filled; a build that makes a second tree (sah-mixed's
                               check, a leaf budget's estimate found too high) may report
                               from 0 again */
     void *progress_ctx;    /* passed to progress */

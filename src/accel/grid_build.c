@@ -492,8 +492,17 @@ bsp_status grid_build(bsp_accel *a, bsp_error *err)
     free(live);
     if (ok)
         g->start[0] = 0;
-    for (uint32_t i = 0; ok && i < g->nsubs; i++)
+    /* progress: the share of the grids made so far that are filled, never
+     * going back (a grid filled may queue more), now and then */
+    double shown = 0.0;
+    for (uint32_t i = 0; ok && i < g->nsubs; i++) {
         ok = fill_subgrid(&b, i);
+        const double done = (double)(i + 1) / g->nsubs;
+        if (a->opts.progress && done >= shown + 0.01 && (i & 255) == 255) {
+            shown = done;
+            a->opts.progress(done, a->opts.progress_ctx);
+        }
+    }
     kd_clip_scratch_free(&b.scr);
     free(b.pairs.v);
     free(b.queued);
