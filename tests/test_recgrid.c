@@ -313,6 +313,8 @@ TEST(recgrid_is_named_grid_rec_on_the_command_line)
     CHECK_RUN(cmd, 0, "\"grid_levels\": 2");
     CHECK_RUN(cmd, 0, "\"grid_cell_prims\": 8");
     CHECK_RUN(cmd, 0, "invariants     ok");
+    CHECK_RUN(cmd, 0, "(cells cut by a grid of their own)");
+    CHECK_RUN(cmd, 0, "grid levels    2");
     snprintf(cmd, sizeof cmd,
              "%s stats spd:tetra --accel grid --grid-levels 3 --grid-cell-prims 20 "
              "--stats-json /dev/stdout 2>&1",

@@ -555,7 +555,9 @@ static int cmd_stats(int argc, char **argv)
         else
             printf("  T_B[s]         %.4f\n", bsp_accel_build_seconds(accel));
         printf("  N_IN           %" PRIu64 "%s\n", t.interior_nodes,
-               kind == BSP_ACCEL_OCTREE ? " (octree nodes of 8 children, 3 kd levels each)" : "");
+               kind == BSP_ACCEL_OCTREE ? " (octree nodes of 8 children, 3 kd levels each)"
+               : kind == BSP_ACCEL_GRID && t.interior_nodes ? " (cells cut by a grid of their own)"
+                                                            : "");
         printf("  N_V            %" PRIu64 "\n", t.leaves);
         printf("  N_EV           %" PRIu64 "\n", t.empty_leaves);
         printf("  N_OIV          %" PRIu64 "\n", t.references);
@@ -570,6 +572,10 @@ static int cmd_stats(int argc, char **argv)
         if (kind == BSP_ACCEL_GRID) {
             printf("  resolution     %d x %d x %d cells\n", t.grid_res[0], t.grid_res[1],
                    t.grid_res[2]);
+            if (t.interior_nodes)
+                printf("  grid levels    %d (the root grid's resolution above; grids nested in\n"
+                       "                 the cut cells below it)\n",
+                       t.max_leaf_depth + 1);
         } else {
             printf("  expected cost  %.3f (SAH, traversal and intersection cost 1)\n",
                    t.expected_cost);
