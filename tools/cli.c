@@ -209,25 +209,19 @@ const char *accel_method_name(const accel_method *m)
 }
 
 /* The variant whose option O carries (0: none), so that a table names it
- * as --accel would. */
+ * as --accel would: one that applying would not change. The table is read
+ * from its end, so that a grid of several levels listed by bounds is named
+ * grid-rec, the variant that changes more of what it is. */
 static int variant_of(const bsp_build_options *o)
 {
-    for (size_t i = 0; i < VARIANTS; i++) {
+    for (size_t i = VARIANTS; i-- > 0;) {
         if (variant_names[i].kind != o->kind)
             continue;
-        int has = 0;
-        switch (variant_names[i].id) {
-        case VARIANT_OCTREE_COST:
-            has = o->octree_split == BSP_OCTREE_COST;
-            break;
-        case VARIANT_GRID_BOUNDS:
-            has = o->grid_assign_bounds && o->grid_levels <= 1;
-            break;
-        case VARIANT_GRID_REC:
-            has = o->grid_levels > 1;
-            break;
-        }
-        if (has)
+        bsp_build_options applied;
+        memcpy(&applied, o, sizeof applied); /* byte for byte, for the memcmp */
+        const accel_method m = {o->kind, (int)i + 1};
+        apply_method(&m, &applied);
+        if (memcmp(&applied, o, sizeof applied) == 0)
             return (int)i + 1;
     }
     return 0;
