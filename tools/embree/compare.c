@@ -48,6 +48,7 @@ static const char *const default_scenes[] = {
 
 static const char usage[] =
     "usage: bspray-embree [SCENE...] [--res N] [--rounds R] [--threads N] [--csv FILE]\n"
+    "                     [--by-outcome]\n"
     "\n"
     "Primary-ray throughput of bspray (SAH kd-tree, mailboxes: what `bspray bench`\n"
     "times) against Embree 3 (high-quality BVH, robust off, rtcIntersect1,\n"
@@ -61,6 +62,9 @@ static const char usage[] =
     "  --rounds R     timed rounds per method (default 5)\n"
     "  --threads N    threads of both builds (default 1); rays are always shot on one\n"
     "  --csv FILE     also write one CSV row per scene to FILE\n"
+    "  --by-outcome   also time the rays that hit and the rays that miss apart, as\n"
+    "                 two more rows per scene ('NAME [hits]', 'NAME [misses]'; by\n"
+    "                 bspray's answer), to see where the two tracers differ\n"
     "  --help         this text\n"
     "\n"
     "Prints a Markdown table (progress on stderr). Exit status 1 on bad arguments or\n"
@@ -72,6 +76,7 @@ typedef struct options {
     size_t nscenes;
     int res, rounds, threads;
     const char *csv_path;
+    int by_outcome; /* --by-outcome */
 } options;
 
 /* --- small utilities ---------------------------------------------------------------- */
@@ -812,6 +817,7 @@ static agreement compare_rays(const embree_scene *es, const struct RTCRay *erays
 
 typedef struct result {
     const char *scene;
+    const char *part; /* the rays timed: "all", "hits" or "misses" (--by-outcome) */
     size_t nprims, tris, users, rays;
     double rate_embree, rate_bspray; /* Mrays/s, best round */
     double ratio_median; /* the median over the rounds of bspray's rate over Embree's in
@@ -885,11 +891,52 @@ static bsp_accel *build_bspray(const bsp_scene *scene, int threads)
     return accel;
 }
 
-/* Runs one scene into *R; returns 0, or 1 when it could not run. */
-static int run_scene(const options *o, RTCDevice dev, const char *name, result *r)
+/* The rays of RL whose closest hit through ACCEL is a hit (HITS 1) or a
+ * miss (HITS 0), in their order. */
+static ray_list rays_by_outcome(const bsp_accel *accel, bsp_query *q, const ray_list *rl, int hits)
+{
+    ray_list sub = {NULL, 0, 0};
+    for (size_t i = 0; i < rl->n; i++) {
+        bsp_hit h;
+        if (bsp_intersect(accel, q, &rl->rays[i], &h) == hits)
+            PUSH(sub.rays, sub.n, sub.cap, rl->rays[i]);
+    }
+    return sub;
+}
+
+/* Times the hitting and the missing rays of RL apart into R[0] and R[1]
+ * (copies of *ALL but for the rays and rates); returns how many parts had
+ * rays. */
+static int time_by_outcome(const options *o, const embree_scene *es, const bsp_accel *accel,
+                           bsp_query *q, const ray_list *rl, const result *all, result *r)
+{
+    int n = 0;
+    for (int hits = 1; hits >= 0; hits--) {
+        ray_list sub = rays_by_outcome(accel, q, rl, hits);
+        if (sub.n) {
+            struct RTCRay *erays = embree_rays(&sub);
+            r[n] = *all;
+            r[n].part = hits ? "hits" : "misses";
+            r[n].rays = sub.n;
+            r[n].agree = compare_rays(es, erays, accel, q, &sub);
+            time_rounds(o, es, erays, accel, q, &sub, &r[n]);
+            free(erays);
+            n++;
+        }
+        free(sub.rays);
+    }
+    return n;
+}
+
+/* Runs one scene into R[0] (and, with --by-outcome, its hitting and missing
+ * rays into R[1] and R[2]); *NROWS gets the rows filled. Returns 0, or 1 when
+ * it could not run. */
+static int run_scene(const options *o, RTCDevice dev, const char *name, result r[3], int *nrows)
 {
     memset(r, 0, sizeof *r);
+    *nrows = 0;
     r->scene = name;
+    r->part = "all";
     bsp_scene *scene = NULL;
     bsp_error err;
     fprintf(stderr, "%s: %s: loading\n", prog, name);
@@ -923,6 +970,7 @@ static int run_scene(const options *o, RTCDevice dev, const char *name, result *
         r->agree = compare_rays(&es, erays, accel, q, &rl);
         time_rounds(o, &es, erays, accel, q, &rl, r);
         free(erays);
+        *nrows = 1 + (o->by_outcome ? time_by_outcome(o, &es, accel, q, &rl, r, r + 1) : 0);
         status = 0;
     }
     free(rl.rays);
@@ -957,8 +1005,9 @@ static void print_header(RTCDevice dev, const options *o)
 
 static void print_row(const result *r)
 {
-    printf("| %s | %zu | %zu / %zu | %zu | %.3f | %.3f | %.2f | %.3f | %.3f | %.0f / %.0f |\n",
-           r->scene, r->nprims, r->tris, r->users, r->rays, r->rate_embree, r->rate_bspray,
+    int whole = !strcmp(r->part, "all");
+    printf("| %s%s%s%s | %zu | %zu / %zu | %zu | %.3f | %.3f | %.2f | %.3f | %.3f | %.0f / %.0f |\n",
+           r->scene, whole ? "" : " [", whole ? "" : r->part, whole ? "" : "]", r->nprims, r->tris, r->users, r->rays, r->rate_embree, r->rate_bspray,
            r->rate_embree > 0.0 ? r->rate_bspray / r->rate_embree : 0.0, r->ratio_median,
            agree_pct(&r->agree), 1e3 * r->build_embree, 1e3 * r->build_bspray);
     fflush(stdout);
@@ -968,16 +1017,16 @@ static const char csv_header[] =
     "scene,prims,embree_triangles,embree_user_prims,ear_clipped_polygons,rays,"
     "embree_mrays_s,bspray_mrays_s,ratio_bspray_embree,agree_pct,disagree_hit_miss,"
     "disagree_t,same_t_other_prim,build_ms_embree,build_ms_bspray,res,rounds,threads,"
-    "ratio_median_round\n";
+    "ratio_median_round,rays_part\n";
 
 static void csv_row(FILE *f, const result *r, const options *o)
 {
-    fprintf(f, "%s,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,%.3f,%.3f,%d,%d,%d,%.4f\n",
+    fprintf(f, "%s,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,%.3f,%.3f,%d,%d,%d,%.4f,%s\n",
             r->scene, r->nprims, r->tris, r->users, r->ear_clipped, r->rays, r->rate_embree,
             r->rate_bspray, r->rate_embree > 0.0 ? r->rate_bspray / r->rate_embree : 0.0,
             agree_pct(&r->agree), r->agree.hit_miss, r->agree.t_differs, r->agree.other_prim,
             1e3 * r->build_embree, 1e3 * r->build_bspray, o->res, o->rounds, o->threads,
-            r->ratio_median);
+            r->ratio_median, r->part);
     fflush(f);
 }
 
@@ -993,6 +1042,7 @@ static int parse_args(int argc, char **argv, options *o)
     o->rounds = 5;
     o->threads = 1;
     o->csv_path = NULL;
+    o->by_outcome = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         int has_value = i + 1 < argc;
@@ -1010,6 +1060,8 @@ static int parse_args(int argc, char **argv, options *o)
                 return fprintf(stderr, "%s: --threads wants 1..256, not '%s'\n", prog, argv[i]), 1;
         } else if (!strcmp(a, "--csv") && has_value) {
             o->csv_path = argv[++i];
+        } else if (!strcmp(a, "--by-outcome")) {
+            o->by_outcome = 1;
         } else if (a[0] == '-' && a[1]) {
             fprintf(stderr, "%s: unknown option or missing value: '%s'\n%s", prog, a, usage);
             return 1;
@@ -1074,14 +1126,18 @@ int main(int argc, char **argv)
     print_header(dev, &o);
     int status = 0;
     for (size_t i = 0; i < o.nscenes; i++) {
-        result r;
-        if (run_scene(&o, dev, o.scenes[i], &r)) {
+        result rows[3], r;
+        int nrows;
+        if (run_scene(&o, dev, o.scenes[i], rows, &nrows)) {
             status = 1;
             continue;
         }
-        print_row(&r);
-        if (csv)
-            csv_row(csv, &r, &o);
+        for (int k = 0; k < nrows; k++) {
+            print_row(&rows[k]);
+            if (csv)
+                csv_row(csv, &rows[k], &o);
+        }
+        r = rows[0];
         if (r.forced_ears)
             fprintf(stderr, "%s: %s: %zu ears forced in degenerate polygons\n", prog,
                     r.scene, r.forced_ears);
