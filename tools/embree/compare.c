@@ -36,9 +36,9 @@ static const char *prog = "bspray-embree";
 
 /* The 13 SPD scenes in the order of `bspray bench` (tools/bench.c). */
 static const char *const default_scenes[] = {
-    "spd:lattice", "spd:rings",     "spd:tree",   "spd:balls",  "spd:gears",
-    "spd:mount",   "spd:teapot:12", "spd:tetra",  "spd:shells", "spd:jacks",
-    "spd:sombrero", "spd:sample",   "spd:nurbtst"};
+    "spd:lattice",  "spd:rings",     "spd:tree",   "spd:balls",  "spd:gears",
+    "spd:mount",    "spd:teapot:12", "spd:tetra",  "spd:shells", "spd:jacks",
+    "spd:sombrero", "spd:sample",    "spd:nurbtst"};
 #define DEFAULT_SCENE_COUNT (sizeof default_scenes / sizeof default_scenes[0])
 
 /* Hits agree when their t differ by at most this much relative to bspray's. */
@@ -106,18 +106,18 @@ static void *xmalloc(size_t n)
 }
 
 /* A growable array of T: p, n, cap. */
-#define PUSH(arr, n, cap, value)                                                            \
-    do {                                                                                    \
-        if ((n) == (cap)) {                                                                 \
-            (cap) = (cap) ? 2 * (cap) : 256;                                                \
-            void *np_ = realloc((arr), (cap) * sizeof *(arr));                              \
-            if (!np_) {                                                                     \
-                fprintf(stderr, "%s: out of memory\n", prog);                               \
-                exit(1);                                                                    \
-            }                                                                               \
-            (arr) = np_;                                                                    \
-        }                                                                                   \
-        (arr)[(n)++] = (value);                                                             \
+#define PUSH(arr, n, cap, value)                                                                   \
+    do {                                                                                           \
+        if ((n) == (cap)) {                                                                        \
+            (cap) = (cap) ? 2 * (cap) : 256;                                                       \
+            void *np_ = realloc((arr), (cap) * sizeof *(arr));                                     \
+            if (!np_) {                                                                            \
+                fprintf(stderr, "%s: out of memory\n", prog);                                      \
+                exit(1);                                                                           \
+            }                                                                                      \
+            (arr) = np_;                                                                           \
+        }                                                                                          \
+        (arr)[(n)++] = (value);                                                                    \
     } while (0)
 
 static int parse_int(const char *s, int lo, int hi, int *out)
@@ -266,11 +266,21 @@ static double cone_t(const user_cone *c, const double *o, const double *d, doubl
 /* Ray I of an Embree SOA packet of N rays (a plain RTCRayHit when N == 1):
  * field K of the ray part is at float index K * N + I, the hit part starts
  * after the ray's 12 fields (the layout of rtcore_ray.h). */
-enum { F_ORG = 0, F_TNEAR = 3, F_DIR = 4, F_TFAR = 8, F_NG = 12, F_U = 15, F_V = 16,
-       F_PRIM = 17, F_GEOM = 18, F_INST = 19 };
+enum {
+    F_ORG = 0,
+    F_TNEAR = 3,
+    F_DIR = 4,
+    F_TFAR = 8,
+    F_NG = 12,
+    F_U = 15,
+    F_V = 16,
+    F_PRIM = 17,
+    F_GEOM = 18,
+    F_INST = 19
+};
 
-typedef double (*shape_t_fn)(const user_geom *g, unsigned prim, const double *o,
-                             const double *d, double tnear, double tfar, double ng[3]);
+typedef double (*shape_t_fn)(const user_geom *g, unsigned prim, const double *o, const double *d,
+                             double tnear, double tfar, double ng[3]);
 
 static double sphere_hit(const user_geom *g, unsigned prim, const double *o, const double *d,
                          double tnear, double tfar, double ng[3])
@@ -395,8 +405,8 @@ typedef struct tri_mesh {
     size_t nindex, cap_index;
     uint32_t *prim; /* bspray primitive of each triangle */
     size_t ntris, cap_tris;
-    size_t ear_clipped;  /* concave polygons triangulated by ear clipping */
-    size_t forced_ears;  /* ears taken without a proper one (degenerate input) */
+    size_t ear_clipped; /* concave polygons triangulated by ear clipping */
+    size_t forced_ears; /* ears taken without a proper one (degenerate input) */
 } tri_mesh;
 
 static unsigned mesh_vertex(tri_mesh *m, bsp_vec3 v)
@@ -512,8 +522,7 @@ static int is_ear(const poly *p, const size_t *idx, size_t m, size_t j, double o
 }
 
 /* Ear clipping of a simple polygon; IDS are the mesh vertex ids. */
-static void ear_clip(tri_mesh *m, const poly *p, const unsigned *ids, double orient,
-                     uint32_t prim)
+static void ear_clip(tri_mesh *m, const poly *p, const unsigned *ids, double orient, uint32_t prim)
 {
     size_t *ring = xmalloc(p->n * sizeof *ring), nr = p->n;
     for (size_t i = 0; i < nr; i++)
@@ -615,7 +624,10 @@ static void add_cone(user_geom *g, const bsp_scene *scene, size_t prim)
     bsp_scene_prim_cone(scene, prim, &b, &rb, &a, &ra);
     double ax[3] = {a.x - b.x, a.y - b.y, a.z - b.z}, len = sqrt(dot3(ax, ax));
     /* the sign of NFF radii only decides shading: both sides are hit */
-    user_cone c = {{b.x, b.y, b.z}, {ax[0] / len, ax[1] / len, ax[2] / len}, len, fabs(rb),
+    user_cone c = {{b.x, b.y, b.z},
+                   {ax[0] / len, ax[1] / len, ax[2] / len},
+                   len,
+                   fabs(rb),
                    (fabs(ra) - fabs(rb)) / len};
     user_geom_push(g, &c, sizeof c, scene, prim);
 }
@@ -664,8 +676,8 @@ static unsigned attach_mesh(RTCDevice dev, RTCScene sc, const tri_mesh *m)
     return id;
 }
 
-static unsigned attach_user(RTCDevice dev, RTCScene sc, user_geom *ug,
-                            RTCIntersectFunctionN isect, RTCOccludedFunctionN occl)
+static unsigned attach_user(RTCDevice dev, RTCScene sc, user_geom *ug, RTCIntersectFunctionN isect,
+                            RTCOccludedFunctionN occl)
 {
     if (ug->n == 0)
         return RTC_INVALID_GEOMETRY_ID;
@@ -736,10 +748,9 @@ static struct RTCRay *embree_rays(const ray_list *rl)
     struct RTCRay *out = xmalloc(rl->n * sizeof *out);
     for (size_t i = 0; i < rl->n; i++) {
         const bsp_ray *r = &rl->rays[i];
-        out[i] = (struct RTCRay){(float)r->org.x, (float)r->org.y, (float)r->org.z,
-                                 (float)r->tmin, (float)r->dir.x, (float)r->dir.y,
-                                 (float)r->dir.z, 0.0f, (float)r->tmax, 0xffffffffu,
-                                 (unsigned)i, 0};
+        out[i] = (struct RTCRay){(float)r->org.x, (float)r->org.y, (float)r->org.z, (float)r->tmin,
+                                 (float)r->dir.x, (float)r->dir.y, (float)r->dir.z, 0.0f,
+                                 (float)r->tmax,  0xffffffffu,     (unsigned)i,     0};
     }
     return out;
 }
@@ -813,15 +824,16 @@ static agreement compare_rays(const embree_scene *es, const struct RTCRay *erays
     return a;
 }
 
-/* --- one scene --------------------------------------------------------------------------------- */
+/* --- one scene ---------------------------------------------------------------------------------
+ */
 
 typedef struct result {
     const char *scene;
     const char *part; /* the rays timed: "all", "hits" or "misses" (--by-outcome) */
     size_t nprims, tris, users, rays;
     double rate_embree, rate_bspray; /* Mrays/s, best round */
-    double ratio_median; /* the median over the rounds of bspray's rate over Embree's in
-                            that round (both on the same slices, so the same machine) */
+    double ratio_median;             /* the median over the rounds of bspray's rate over Embree's in
+                                        that round (both on the same slices, so the same machine) */
     double build_embree, build_bspray; /* seconds */
     agreement agree;
     size_t ear_clipped, forced_ears;
@@ -866,8 +878,8 @@ static void time_rounds(const options *o, const embree_scene *es, const struct R
         best_e = fmin(best_e, te);
         best_b = fmin(best_b, tb);
         ratio[round] = tb > 0.0 ? te / tb : 0.0;
-        fprintf(stderr, "%s: %s: round %d: Embree %.3f s, bspray %.3f s (hits %zu / %zu)\n",
-                prog, r->scene, round + 1, te, tb, he, hb);
+        fprintf(stderr, "%s: %s [%s]: round %d: Embree %.3f s, bspray %.3f s (hits %zu / %zu)\n",
+                prog, r->scene, r->part, round + 1, te, tb, he, hb);
     }
     r->rate_embree = best_e > 0.0 ? (double)rl->n / best_e * 1e-6 : 0.0;
     r->rate_bspray = best_b > 0.0 ? (double)rl->n / best_b * 1e-6 : 0.0;
@@ -981,7 +993,8 @@ static int run_scene(const options *o, RTCDevice dev, const char *name, result r
     return status;
 }
 
-/* --- output -------------------------------------------------------------------------------------- */
+/* --- output --------------------------------------------------------------------------------------
+ */
 
 static double agree_pct(const agreement *a)
 {
@@ -1006,10 +1019,12 @@ static void print_header(RTCDevice dev, const options *o)
 static void print_row(const result *r)
 {
     int whole = !strcmp(r->part, "all");
-    printf("| %s%s%s%s | %zu | %zu / %zu | %zu | %.3f | %.3f | %.2f | %.3f | %.3f | %.0f / %.0f |\n",
-           r->scene, whole ? "" : " [", whole ? "" : r->part, whole ? "" : "]", r->nprims, r->tris, r->users, r->rays, r->rate_embree, r->rate_bspray,
-           r->rate_embree > 0.0 ? r->rate_bspray / r->rate_embree : 0.0, r->ratio_median,
-           agree_pct(&r->agree), 1e3 * r->build_embree, 1e3 * r->build_bspray);
+    printf(
+        "| %s%s%s%s | %zu | %zu / %zu | %zu | %.3f | %.3f | %.2f | %.3f | %.3f | %.0f / %.0f |\n",
+        r->scene, whole ? "" : " [", whole ? "" : r->part, whole ? "" : "]", r->nprims, r->tris,
+        r->users, r->rays, r->rate_embree, r->rate_bspray,
+        r->rate_embree > 0.0 ? r->rate_bspray / r->rate_embree : 0.0, r->ratio_median,
+        agree_pct(&r->agree), 1e3 * r->build_embree, 1e3 * r->build_bspray);
     fflush(stdout);
 }
 
@@ -1021,7 +1036,8 @@ static const char csv_header[] =
 
 static void csv_row(FILE *f, const result *r, const options *o)
 {
-    fprintf(f, "%s,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,%.3f,%.3f,%d,%d,%d,%.4f,%s\n",
+    fprintf(f,
+            "%s,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,%.3f,%.3f,%d,%d,%d,%.4f,%s\n",
             r->scene, r->nprims, r->tris, r->users, r->ear_clipped, r->rays, r->rate_embree,
             r->rate_bspray, r->rate_embree > 0.0 ? r->rate_bspray / r->rate_embree : 0.0,
             agree_pct(&r->agree), r->agree.hit_miss, r->agree.t_differs, r->agree.other_prim,
@@ -1030,7 +1046,8 @@ static void csv_row(FILE *f, const result *r, const options *o)
     fflush(f);
 }
 
-/* --- main ------------------------------------------------------------------------------------------ */
+/* --- main
+ * ------------------------------------------------------------------------------------------ */
 
 /* Parses ARGV into *O; returns -1 to go on, else the exit status. */
 static int parse_args(int argc, char **argv, options *o)
@@ -1139,8 +1156,8 @@ int main(int argc, char **argv)
         }
         r = rows[0];
         if (r.forced_ears)
-            fprintf(stderr, "%s: %s: %zu ears forced in degenerate polygons\n", prog,
-                    r.scene, r.forced_ears);
+            fprintf(stderr, "%s: %s: %zu ears forced in degenerate polygons\n", prog, r.scene,
+                    r.forced_ears);
         if ((double)r.agree.disagree > MAX_DISAGREEMENT * (double)r.agree.rays) {
             fprintf(stderr,
                     "%s: %s: %zu of %zu rays disagree (%zu hit/miss, %zu t): more than 1%%, "
