@@ -100,8 +100,8 @@ typedef struct walk {
  * and the mailbox's stamp for this ray (FROM, the primitive left out,
  * already stamped). -1: the ray lies outside the precision domain (the
  * naive method answers it); 0: nothing to walk; 1: walk. */
-static int walk_begin(walk *w, const grid *g, const bsp_scene *s, bsp_query *q,
-                      const bsp_ray *ray, uint32_t from)
+static int walk_begin(walk *w, const grid *g, const bsp_scene *s, bsp_query *q, const bsp_ray *ray,
+                      uint32_t from)
 {
     w->g = g;
     w->s = s;
@@ -128,13 +128,13 @@ static int walk_begin(walk *w, const grid *g, const bsp_scene *s, bsp_query *q,
     return 1;
 }
 
-/* Tests cell C's list for the closest hit. The walk's state is copied into
- * locals for the loop and back after it: the kernels read the ray, and the
- * loop writes the best hit, through the same walk record, which the
- * compiler must then assume aliased and reload after every test (callgrind,
- * a 129 x 129 render of balls on the uniform grid: 1,018 M instructions
- * without the copies, 1,014 M with them, 971 M for the walk before it
- * handled subgrids). */
+/* Tests cell C's list for the closest hit. The walk's state (the scene,
+ * the ray, the mailbox, the best hit) is copied into locals for the loop and
+ * back after it, and an empty cell copies nothing: read through the walk
+ * record, which the nested grids' walks share, the kernels reloaded the ray
+ * on every test (callgrind, a 129 x 129 render of balls on the uniform grid:
+ * 971 M instructions for the walk before it handled subgrids, 1,018 M
+ * through the record, 979 M with these copies and any_in_cell's). */
 static inline void closest_in_cell(walk *w, uint64_t c)
 {
     const grid *g = w->g;
@@ -142,6 +142,9 @@ static inline void closest_in_cell(walk *w, uint64_t c)
     w->cells++;
     w->nonempty += list != end;
     w->refs += (uint64_t)(end - list);
+    if (list == end)
+        return;
+    const bsp_scene *const sc = w->s;
     const isect_ray r = w->r;
     uint32_t *const mbox = w->mbox;
     const uint32_t stamp = w->stamp, from = w->from;
@@ -159,7 +162,7 @@ static inline void closest_in_cell(walk *w, uint64_t c)
             continue;
         }
         tests++;
-        if (scene_isect(w->s, p, &r, tmax, &h) && (h.t < best.t || p < best_p)) {
+        if (scene_isect(sc, p, &r, tmax, &h) && (h.t < best.t || p < best_p)) {
             best = h;
             best_p = p;
             tmax = h.t;
@@ -198,27 +201,43 @@ static int closest_in_grid(walk *w, const subgrid *s)
     }
 }
 
-/* Tests cell C's list for any hit. */
+/* Tests cell C's list for any hit, with the walk's state in locals as
+ * closest_in_cell keeps it; REFS counts the entries met up to the hit. */
 static inline void any_in_cell(walk *w, uint64_t c)
 {
     const grid *g = w->g;
     const uint32_t *list = g->prims + g->start[c], *end = g->prims + g->start[c + 1];
     w->cells++;
     w->nonempty += list != end;
+    if (list == end)
+        return;
+    const isect_ray r = w->r;
+    const double tmax = w->ray->tmax;
+    uint32_t *const mbox = w->mbox;
+    const uint32_t stamp = w->stamp, from = w->from;
+    const uint32_t *const begin = list;
+    uint64_t tests = 0;
+    int found = 0;
     scene_isect_hit h;
-    for (; list != end && !w->found; list++) {
+    for (; list != end; list++) {
         const uint32_t p = *list;
-        w->refs++;
-        if (w->mbox) {
-            if (w->mbox[p] == w->stamp)
+        if (mbox) {
+            if (mbox[p] == stamp)
                 continue;
-            w->mbox[p] = w->stamp;
-        } else if (p == w->from) {
+            mbox[p] = stamp;
+        } else if (p == from) {
             continue;
         }
-        w->tests++;
-        w->found = scene_isect(w->s, p, &w->r, w->ray->tmax, &h);
+        tests++;
+        if (scene_isect(w->s, p, &r, tmax, &h)) {
+            found = 1;
+            list++;
+            break;
+        }
     }
+    w->refs += (uint64_t)(list - begin);
+    w->tests += tests;
+    w->found = found;
 }
 
 /* Walks grid S (and the grids below it) until any hit is found. */
