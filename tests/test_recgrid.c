@@ -3,7 +3,8 @@
  * Jevans and Wyvill 1989) beyond the exactness tests it shares with the
  * kd-trees (test_kdtree.c, a variant of three levels): which cells are cut
  * and how, checked against a scene whose grids are worked out by hand; the
- * walk's counts on rays through a cut cell, also worked out by hand; that
+ * walk's counts on rays through a cut cell, closest and any hit, also worked
+ * out by hand; that
  * one level is the uniform grid; the refusals and the size limit; the
  * command line's names for it; and Havran's recursive grids of tetra
  * (../shared/reference/havran_stats_grids.txt, "Recursive Grid", RHT +),
@@ -153,6 +154,18 @@ TEST(recgrid_cuts_the_crowded_cell_by_hand)
     bsp_scene_destroy(s);
 }
 
+/* The naive method over S: the answers the walks are checked against. */
+static bsp_accel *naive_accel(const bsp_scene *s)
+{
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_NAIVE;
+    bsp_accel *naive = NULL;
+    bsp_error err;
+    REQUIRE(bsp_accel_build(s, &o, &naive, &err) == BSP_OK);
+    return naive;
+}
+
 /* One ray along +x from x = -10 at height Y = Z through ACCEL: its hit and
  * counters, checked against the naive method's hit. */
 static void shoot_x(const bsp_scene *s, const bsp_accel *a, double yz, bsp_hit *hit, int *found,
@@ -164,12 +177,7 @@ static void shoot_x(const bsp_scene *s, const bsp_accel *a, double yz, bsp_hit *
     *found = bsp_intersect(a, q, &ray, hit);
     *c = *bsp_query_get_counters(q);
     bsp_query_destroy(q);
-    bsp_build_options o;
-    bsp_build_options_defaults(&o);
-    o.kind = BSP_ACCEL_NAIVE;
-    bsp_accel *naive = NULL;
-    bsp_error err;
-    REQUIRE(bsp_accel_build(s, &o, &naive, &err) == BSP_OK);
+    bsp_accel *naive = naive_accel(s);
     bsp_query *nq = bsp_query_create(naive);
     bsp_hit nh;
     int nf = bsp_intersect(naive, nq, &ray, &nh);
@@ -207,6 +215,66 @@ TEST(recgrid_walk_descends_into_the_cut_cell)
               "steps %llu leaves %llu empty %llu tests %llu",
               (unsigned long long)c.traversal_steps, (unsigned long long)c.leaves_visited,
               (unsigned long long)c.empty_leaves, (unsigned long long)c.isect_tests);
+    bsp_accel_destroy(r);
+    bsp_accel_destroy(u);
+    bsp_scene_destroy(s);
+}
+
+/* The same ray as shoot_x as an occlusion query: its answer and counters,
+ * checked against the naive method's answer. */
+static int shoot_x_any(const bsp_scene *s, const bsp_accel *a, double yz, bsp_query_counters *c)
+{
+    bsp_ray ray = {bsp_v3(-10, yz, yz), bsp_v3(1, 0, 0), 0.0, INFINITY};
+    bsp_query *q = bsp_query_create(a);
+    REQUIRE(q != NULL);
+    int on = bsp_occluded(a, q, &ray);
+    *c = *bsp_query_get_counters(q);
+    bsp_query_destroy(q);
+    bsp_accel *naive = naive_accel(s);
+    bsp_query *nq = bsp_query_create(naive);
+    CHECK(bsp_occluded(naive, nq, &ray) == on);
+    bsp_query_destroy(nq);
+    bsp_accel_destroy(naive);
+    return on;
+}
+
+/* Whether C counts STEPS traversal steps, LEAVES cells, EMPTY empty cells,
+ * TESTS tests and no mailbox hit; prints what it counts when not. */
+static int counts_are(const bsp_query_counters *c, uint64_t steps, uint64_t leaves,
+                      uint64_t empty, uint64_t tests)
+{
+    int ok = c->traversal_steps == steps && c->leaves_visited == leaves &&
+             c->empty_leaves == empty && c->isect_tests == tests && c->mailbox_hits == 0;
+    if (!ok)
+        fprintf(stderr, "  counted: steps %llu leaves %llu empty %llu tests %llu mailbox %llu\n",
+                (unsigned long long)c->traversal_steps, (unsigned long long)c->leaves_visited,
+                (unsigned long long)c->empty_leaves, (unsigned long long)c->isect_tests,
+                (unsigned long long)c->mailbox_hits);
+    return ok;
+}
+
+TEST(recgrid_any_hit_walk_stops_at_the_first_hit)
+{
+    bsp_scene *s = cluster_scene();
+    bsp_accel *r = cluster_grid(s, 2, 8), *u = cluster_grid(s, 1, 8);
+    bsp_query_counters c;
+    /* at y = z = -2: the octant (cut, a step), its first subcell on that row,
+     * which lists sphere 14 alone, hit: one test */
+    CHECK(shoot_x_any(s, r, -2.0, &c));
+    CHECK(counts_are(&c, 2, 1, 0, 1));
+    /* the uniform grid's octant lists spheres 0, 2, ..., 28 in that order;
+     * the first the ray meets is 14 (0 and 2..13 lie off its row): 14 tests,
+     * and the walk stops there */
+    CHECK(shoot_x_any(s, u, -2.0, &c));
+    CHECK(counts_are(&c, 1, 1, 0, 14));
+    /* at y = z = -2.4 nothing blocks: every cell the ray passes is tested
+     * whole, as by the closest-hit walk: the octant (a step), its three
+     * subcells of the row, the root's empty cell (1, 0, 0); on the uniform
+     * grid the octant's 28 spheres and that empty cell */
+    CHECK(!shoot_x_any(s, r, -2.4, &c));
+    CHECK(counts_are(&c, 5, 4, 1, 3));
+    CHECK(!shoot_x_any(s, u, -2.4, &c));
+    CHECK(counts_are(&c, 2, 2, 1, 28));
     bsp_accel_destroy(r);
     bsp_accel_destroy(u);
     bsp_scene_destroy(s);
