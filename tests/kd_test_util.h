@@ -1,6 +1,6 @@
 /*
  * kd_test_util.h — helpers shared by the tests of the kd-tree's copies
- * (test_kd_local.c, test_kd_walk.c).
+ * (test_kd_local.c, test_kd_walk.c, and others that need a structure built).
  */
 #ifndef BSPRAY_TESTS_KD_TEST_UTIL_H
 #define BSPRAY_TESTS_KD_TEST_UTIL_H

@@ -20,6 +20,7 @@
 #include "bspray/bspray.h"
 #include "harness.h"
 #include "havran_test_util.h"
+#include "kd_test_util.h"
 
 /* The hand-made scene: a box of about [-4, 4]^3, made by a sphere of
  * radius 0.1 at (-3.9, -3.9, -3.9) and one of radius 1 at (3, 3, 3); and
@@ -154,18 +155,6 @@ TEST(recgrid_cuts_the_crowded_cell_by_hand)
     bsp_scene_destroy(s);
 }
 
-/* The naive method over S: the answers the walks are checked against. */
-static bsp_accel *naive_accel(const bsp_scene *s)
-{
-    bsp_build_options o;
-    bsp_build_options_defaults(&o);
-    o.kind = BSP_ACCEL_NAIVE;
-    bsp_accel *naive = NULL;
-    bsp_error err;
-    REQUIRE(bsp_accel_build(s, &o, &naive, &err) == BSP_OK);
-    return naive;
-}
-
 /* One ray along +x from x = -10 at height Y = Z through ACCEL: its hit and
  * counters, checked against the naive method's hit. */
 static void shoot_x(const bsp_scene *s, const bsp_accel *a, double yz, bsp_hit *hit, int *found,
@@ -177,7 +166,7 @@ static void shoot_x(const bsp_scene *s, const bsp_accel *a, double yz, bsp_hit *
     *found = bsp_intersect(a, q, &ray, hit);
     *c = *bsp_query_get_counters(q);
     bsp_query_destroy(q);
-    bsp_accel *naive = naive_accel(s);
+    bsp_accel *naive = kd_test_build(s, BSP_ACCEL_NAIVE);
     bsp_query *nq = bsp_query_create(naive);
     bsp_hit nh;
     int nf = bsp_intersect(naive, nq, &ray, &nh);
@@ -230,7 +219,7 @@ static int shoot_x_any(const bsp_scene *s, const bsp_accel *a, double yz, bsp_qu
     int on = bsp_occluded(a, q, &ray);
     *c = *bsp_query_get_counters(q);
     bsp_query_destroy(q);
-    bsp_accel *naive = naive_accel(s);
+    bsp_accel *naive = kd_test_build(s, BSP_ACCEL_NAIVE);
     bsp_query *nq = bsp_query_create(naive);
     CHECK(bsp_occluded(naive, nq, &ray) == on);
     bsp_query_destroy(nq);

@@ -128,13 +128,29 @@ static int walk_begin(walk *w, const grid *g, const bsp_scene *s, bsp_query *q, 
     return 1;
 }
 
+/* Whether entry P of a cell is not tested: with the mailbox, when it was
+ * tested before with this ray (its stamp is STAMP; else it gets it), and
+ * without, when it is SKIP1 or SKIP2 (the primitive left out, or the
+ * closest hit's so far: met again, its test could only find the same hit). */
+static inline __attribute__((always_inline)) int
+met_before(uint32_t *mbox, uint32_t stamp, uint32_t p, uint32_t skip1, uint32_t skip2)
+{
+    if (mbox) {
+        if (mbox[p] == stamp)
+            return 1;
+        mbox[p] = stamp;
+        return 0;
+    }
+    return p == skip1 || p == skip2;
+}
+
 /* Tests cell C's list for the closest hit. The walk's state (the scene,
  * the ray, the mailbox, the best hit) is copied into locals for the loop and
  * back after it, and an empty cell copies nothing: read through the walk
  * record, which the nested grids' walks share, the kernels reloaded the ray
  * on every test (callgrind, a 129 x 129 render of balls on the uniform grid:
  * 971 M instructions for the walk before it handled subgrids, 1,018 M
- * through the record, 979 M with these copies and any_in_cell's). */
+ * through the record, 974 M with these copies and any_in_cell's). */
 static inline void closest_in_cell(walk *w, uint64_t c)
 {
     const grid *g = w->g;
@@ -154,13 +170,8 @@ static inline void closest_in_cell(walk *w, uint64_t c)
     uint64_t tests = 0;
     for (; list != end; list++) {
         const uint32_t p = *list;
-        if (mbox) {
-            if (mbox[p] == stamp)
-                continue;
-            mbox[p] = stamp;
-        } else if (p == from || p == best_p) {
+        if (met_before(mbox, stamp, p, from, best_p))
             continue;
-        }
         tests++;
         if (scene_isect(sc, p, &r, tmax, &h) && (h.t < best.t || p < best_p)) {
             best = h;
@@ -211,6 +222,7 @@ static inline void any_in_cell(walk *w, uint64_t c)
     w->nonempty += list != end;
     if (list == end)
         return;
+    const bsp_scene *const sc = w->s;
     const isect_ray r = w->r;
     const double tmax = w->ray->tmax;
     uint32_t *const mbox = w->mbox;
@@ -221,15 +233,10 @@ static inline void any_in_cell(walk *w, uint64_t c)
     scene_isect_hit h;
     for (; list != end; list++) {
         const uint32_t p = *list;
-        if (mbox) {
-            if (mbox[p] == stamp)
-                continue;
-            mbox[p] = stamp;
-        } else if (p == from) {
+        if (met_before(mbox, stamp, p, from, from))
             continue;
-        }
         tests++;
-        if (scene_isect(w->s, p, &r, tmax, &h)) {
+        if (scene_isect(sc, p, &r, tmax, &h)) {
             found = 1;
             list++;
             break;
