@@ -903,39 +903,31 @@ static bsp_accel *build_bspray(const bsp_scene *scene, int threads)
     return accel;
 }
 
-/* The rays of RL whose closest hit through ACCEL is a hit (HITS 1) or a
- * miss (HITS 0), in their order. */
-static ray_list rays_by_outcome(const bsp_accel *accel, bsp_query *q, const ray_list *rl, int hits)
-{
-    ray_list sub = {NULL, 0, 0};
-    for (size_t i = 0; i < rl->n; i++) {
-        bsp_hit h;
-        if (bsp_intersect(accel, q, &rl->rays[i], &h) == hits)
-            PUSH(sub.rays, sub.n, sub.cap, rl->rays[i]);
-    }
-    return sub;
-}
-
-/* Times the hitting and the missing rays of RL apart into R[0] and R[1]
- * (copies of *ALL but for the rays and rates); returns how many parts had
- * rays. */
+/* Times the hitting and the missing rays of RL (by bspray's answer) apart
+ * into R[0] and R[1] (copies of *ALL but for the rays and rates); returns
+ * how many parts had rays. */
 static int time_by_outcome(const options *o, const embree_scene *es, const bsp_accel *accel,
                            bsp_query *q, const ray_list *rl, const result *all, result *r)
 {
+    ray_list part[2] = {{NULL, 0, 0}, {NULL, 0, 0}}; /* [0] hits, [1] misses */
+    for (size_t i = 0; i < rl->n; i++) {
+        bsp_hit h;
+        ray_list *to = &part[!bsp_intersect(accel, q, &rl->rays[i], &h)];
+        PUSH(to->rays, to->n, to->cap, rl->rays[i]);
+    }
     int n = 0;
-    for (int hits = 1; hits >= 0; hits--) {
-        ray_list sub = rays_by_outcome(accel, q, rl, hits);
-        if (sub.n) {
-            struct RTCRay *erays = embree_rays(&sub);
+    for (int k = 0; k < 2; k++) {
+        if (part[k].n) {
+            struct RTCRay *erays = embree_rays(&part[k]);
             r[n] = *all;
-            r[n].part = hits ? "hits" : "misses";
-            r[n].rays = sub.n;
-            r[n].agree = compare_rays(es, erays, accel, q, &sub);
-            time_rounds(o, es, erays, accel, q, &sub, &r[n]);
+            r[n].part = k == 0 ? "hits" : "misses";
+            r[n].rays = part[k].n;
+            r[n].agree = compare_rays(es, erays, accel, q, &part[k]);
+            time_rounds(o, es, erays, accel, q, &part[k], &r[n]);
             free(erays);
             n++;
         }
-        free(sub.rays);
+        free(part[k].rays);
     }
     return n;
 }
