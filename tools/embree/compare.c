@@ -62,9 +62,11 @@ static const char usage[] =
     "  --rounds R     timed rounds per method (default 5)\n"
     "  --threads N    threads of both builds (default 1); rays are always shot on one\n"
     "  --csv FILE     also write one CSV row per scene to FILE\n"
-    "  --by-outcome   also time the rays that hit and the rays that miss apart, as\n"
-    "                 two more rows per scene ('NAME [hits]', 'NAME [misses]'; by\n"
-    "                 bspray's answer), to see where the two tracers differ\n"
+    "  --by-outcome   also time the rays that hit, the rays that miss inside the\n"
+    "                 scene's box and those that miss the box itself apart, as up\n"
+    "                 to three more rows per scene ('NAME [hits]', 'NAME [misses in\n"
+    "                 box]', 'NAME [misses off box]'; by bspray's answer and its\n"
+    "                 count of cells visited), to see where the two tracers differ\n"
     "  --help         this text\n"
     "\n"
     "Prints a Markdown table (progress on stderr). Exit status 1 on bad arguments or\n"
@@ -829,7 +831,8 @@ static agreement compare_rays(const embree_scene *es, const struct RTCRay *erays
 
 typedef struct result {
     const char *scene;
-    const char *part; /* the rays timed: "all", "hits" or "misses" (--by-outcome) */
+    const char *part; /* the rays timed: "all", or with --by-outcome "hits", "misses in box"
+                         or "misses off box" */
     size_t nprims, tris, users, rays;
     double rate_embree, rate_bspray; /* Mrays/s, best round */
     double ratio_median;             /* the median over the rounds of bspray's rate over Embree's in
@@ -903,24 +906,29 @@ static bsp_accel *build_bspray(const bsp_scene *scene, int threads)
     return accel;
 }
 
-/* Times the hitting and the missing rays of RL (by bspray's answer) apart
- * into R[0] and R[1] (copies of *ALL but for the rays and rates); returns
- * how many parts had rays. */
+/* Times three parts of RL apart, by bspray's answer and its counters: the
+ * rays that hit, those that miss after crossing at least one cell of the
+ * tree (inside the scene's box), and those that visit no cell (they miss
+ * the box, or leave the precision domain); into R[0..] (copies of *ALL but
+ * for the rays and rates). Returns how many parts had rays. */
 static int time_by_outcome(const options *o, const embree_scene *es, const bsp_accel *accel,
                            bsp_query *q, const ray_list *rl, const result *all, result *r)
 {
-    ray_list part[2] = {{NULL, 0, 0}, {NULL, 0, 0}}; /* [0] hits, [1] misses */
+    static const char *const names[3] = {"hits", "misses in box", "misses off box"};
+    ray_list part[3] = {{NULL, 0, 0}, {NULL, 0, 0}, {NULL, 0, 0}};
     for (size_t i = 0; i < rl->n; i++) {
         bsp_hit h;
-        ray_list *to = &part[!bsp_intersect(accel, q, &rl->rays[i], &h)];
-        PUSH(to->rays, to->n, to->cap, rl->rays[i]);
+        bsp_query_reset_counters(q);
+        int hit = bsp_intersect(accel, q, &rl->rays[i], &h);
+        int k = hit ? 0 : bsp_query_get_counters(q)->leaves_visited ? 1 : 2;
+        PUSH(part[k].rays, part[k].n, part[k].cap, rl->rays[i]);
     }
     int n = 0;
-    for (int k = 0; k < 2; k++) {
+    for (int k = 0; k < 3; k++) {
         if (part[k].n) {
             struct RTCRay *erays = embree_rays(&part[k]);
             r[n] = *all;
-            r[n].part = k == 0 ? "hits" : "misses";
+            r[n].part = names[k];
             r[n].rays = part[k].n;
             r[n].agree = compare_rays(es, erays, accel, q, &part[k]);
             time_rounds(o, es, erays, accel, q, &part[k], &r[n]);
@@ -932,10 +940,10 @@ static int time_by_outcome(const options *o, const embree_scene *es, const bsp_a
     return n;
 }
 
-/* Runs one scene into R[0] (and, with --by-outcome, its hitting and missing
- * rays into R[1] and R[2]); *NROWS gets the rows filled. Returns 0, or 1 when
+/* Runs one scene into R[0] (and, with --by-outcome, the parts of its rays
+ * into R[1..3]); *NROWS gets the rows filled. Returns 0, or 1 when
  * it could not run. */
-static int run_scene(const options *o, RTCDevice dev, const char *name, result r[3], int *nrows)
+static int run_scene(const options *o, RTCDevice dev, const char *name, result r[4], int *nrows)
 {
     memset(r, 0, sizeof *r);
     *nrows = 0;
@@ -1135,7 +1143,7 @@ int main(int argc, char **argv)
     print_header(dev, &o);
     int status = 0;
     for (size_t i = 0; i < o.nscenes; i++) {
-        result rows[3], r;
+        result rows[4], r;
         int nrows;
         if (run_scene(&o, dev, o.scenes[i], rows, &nrows)) {
             status = 1;
