@@ -48,7 +48,7 @@ static const char *const default_scenes[] = {
 
 static const char usage[] =
     "usage: bspray-embree [SCENE...] [--res N] [--rounds R] [--threads N] [--csv FILE]\n"
-    "                     [--by-outcome]\n"
+    "                     [--by-outcome] [--twice]\n"
     "\n"
     "Primary-ray throughput of bspray (SAH kd-tree, mailboxes: what `bspray bench`\n"
     "times) against Embree 3 (high-quality BVH, robust off, rtcIntersect1,\n"
@@ -67,6 +67,10 @@ static const char usage[] =
     "                 to three more rows per scene ('NAME [hits]', 'NAME [misses in\n"
     "                 box]', 'NAME [misses off box]'; by bspray's answer and its\n"
     "                 count of cells visited), to see where the two tracers differ\n"
+    "  --twice        shoot every ray twice in a row, in both tracers; the rates still\n"
+    "                 count rays, so a ray's time covers both shots. Against a run\n"
+    "                 without it, it shows what the second shot costs, with the\n"
+    "                 ray's nodes in the caches and its branches just seen\n"
     "  --help         this text\n"
     "\n"
     "Prints a Markdown table (progress on stderr). Exit status 1 on bad arguments or\n"
@@ -79,6 +83,7 @@ typedef struct options {
     int res, rounds, threads;
     const char *csv_path;
     int by_outcome; /* --by-outcome */
+    int shots;      /* queries per ray in a timed pass: 1, or 2 with --twice */
 } options;
 
 /* --- small utilities ---------------------------------------------------------------- */
@@ -770,14 +775,17 @@ static inline void embree_shoot(RTCScene sc, const struct RTCRay *ray, struct RT
 
 /* CPU seconds of one Embree pass over every ray; *HITS counts the hits so
  * the work cannot be optimised away. */
-static double embree_pass(RTCScene sc, const struct RTCRay *rays, size_t n, size_t *hits)
+static double embree_pass(RTCScene sc, const struct RTCRay *rays, size_t n, int shots,
+                          size_t *hits)
 {
     struct RTCRayHit rh;
     size_t h = 0;
     double t0 = cpu_seconds();
     for (size_t i = 0; i < n; i++) {
-        embree_shoot(sc, &rays[i], &rh);
-        h += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+        for (int k = 0; k < shots; k++) {
+            embree_shoot(sc, &rays[i], &rh);
+            h += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+        }
     }
     double t = cpu_seconds() - t0;
     *hits = h;
@@ -785,13 +793,14 @@ static double embree_pass(RTCScene sc, const struct RTCRay *rays, size_t n, size
 }
 
 static double bspray_pass(const bsp_accel *accel, bsp_query *q, const bsp_ray *rays, size_t n,
-                          size_t *hits)
+                          int shots, size_t *hits)
 {
     bsp_hit hit;
     size_t h = 0;
     double t0 = cpu_seconds();
     for (size_t i = 0; i < n; i++)
-        h += (size_t)bsp_intersect(accel, q, &rays[i], &hit);
+        for (int k = 0; k < shots; k++)
+            h += (size_t)bsp_intersect(accel, q, &rays[i], &hit);
     double t = cpu_seconds() - t0;
     *hits = h;
     return t;
@@ -869,11 +878,11 @@ static void time_rounds(const options *o, const embree_scene *es, const struct R
         for (size_t i = 0, k = 0; i < rl->n; i += SLICE_RAYS, k++) {
             size_t n = rl->n - i < SLICE_RAYS ? rl->n - i : SLICE_RAYS, h1, h2;
             if ((k + (size_t)round) % 2 == 0) {
-                te += embree_pass(es->scene, erays + i, n, &h1);
-                tb += bspray_pass(accel, q, rl->rays + i, n, &h2);
+                te += embree_pass(es->scene, erays + i, n, o->shots, &h1);
+                tb += bspray_pass(accel, q, rl->rays + i, n, o->shots, &h2);
             } else {
-                tb += bspray_pass(accel, q, rl->rays + i, n, &h2);
-                te += embree_pass(es->scene, erays + i, n, &h1);
+                tb += bspray_pass(accel, q, rl->rays + i, n, o->shots, &h2);
+                te += embree_pass(es->scene, erays + i, n, o->shots, &h1);
             }
             he += h1;
             hb += h2;
@@ -1009,8 +1018,10 @@ static void print_header(RTCDevice dev, const options *o)
            "(double-precision callbacks); builds on %d thread(s).\n",
            (long)(v / 10000), (long)(v / 100 % 100), (long)(v % 100), o->threads);
     printf("bspray: default build (sah, mailboxes), bsp_intersect. %d x %d primary rays, "
-           "single thread, thread CPU time, best of %d interleaved rounds.\n\n",
-           o->res, o->res, o->rounds);
+           "single thread, thread CPU time, best of %d interleaved rounds%s.\n\n",
+           o->res, o->res, o->rounds,
+           o->shots == 2 ? "; every ray shot twice in a row (--twice), its time covering both"
+                         : "");
     printf("| scene | prims | Embree tris / user | rays | Embree Mrays/s | bspray Mrays/s "
            "| bspray/Embree | median round ratio | agree %% | build ms Embree / bspray |\n");
     printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
@@ -1032,17 +1043,17 @@ static const char csv_header[] =
     "scene,prims,embree_triangles,embree_user_prims,ear_clipped_polygons,rays,"
     "embree_mrays_s,bspray_mrays_s,ratio_bspray_embree,agree_pct,disagree_hit_miss,"
     "disagree_t,same_t_other_prim,build_ms_embree,build_ms_bspray,res,rounds,threads,"
-    "ratio_median_round,rays_part\n";
+    "ratio_median_round,rays_part,shots\n";
 
 static void csv_row(FILE *f, const result *r, const options *o)
 {
     fprintf(f,
-            "%s,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,%.3f,%.3f,%d,%d,%d,%.4f,%s\n",
+            "%s,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,%.3f,%.3f,%d,%d,%d,%.4f,%s,%d\n",
             r->scene, r->nprims, r->tris, r->users, r->ear_clipped, r->rays, r->rate_embree,
             r->rate_bspray, r->rate_embree > 0.0 ? r->rate_bspray / r->rate_embree : 0.0,
             agree_pct(&r->agree), r->agree.hit_miss, r->agree.t_differs, r->agree.other_prim,
             1e3 * r->build_embree, 1e3 * r->build_bspray, o->res, o->rounds, o->threads,
-            r->ratio_median, r->part);
+            r->ratio_median, r->part, o->shots);
     fflush(f);
 }
 
@@ -1058,6 +1069,7 @@ static int parse_args(int argc, char **argv, options *o)
     o->res = 513;
     o->rounds = 5;
     o->threads = 1;
+    o->shots = 1;
     o->csv_path = NULL;
     o->by_outcome = 0;
     for (int i = 1; i < argc; i++) {
@@ -1077,6 +1089,8 @@ static int parse_args(int argc, char **argv, options *o)
                 return fprintf(stderr, "%s: --threads wants 1..256, not '%s'\n", prog, argv[i]), 1;
         } else if (!strcmp(a, "--csv") && has_value) {
             o->csv_path = argv[++i];
+        } else if (!strcmp(a, "--twice")) {
+            o->shots = 2;
         } else if (!strcmp(a, "--by-outcome")) {
             o->by_outcome = 1;
         } else if (a[0] == '-' && a[1]) {
