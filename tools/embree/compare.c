@@ -835,8 +835,7 @@ static agreement compare_rays(const embree_scene *es, const struct RTCRay *erays
     return a;
 }
 
-/* --- one scene ---------------------------------------------------------------------------------
- */
+/* --- one scene ----------------------------------------------------------------------------- */
 
 typedef struct result {
     const char *scene;
@@ -1002,8 +1001,7 @@ static int run_scene(const options *o, RTCDevice dev, const char *name, result r
     return status;
 }
 
-/* --- output --------------------------------------------------------------------------------------
- */
+/* --- output -------------------------------------------------------------------------------- */
 
 static double agree_pct(const agreement *a)
 {
@@ -1048,7 +1046,8 @@ static const char csv_header[] =
 static void csv_row(FILE *f, const result *r, const options *o)
 {
     fprintf(f,
-            "%s,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,%.3f,%.3f,%d,%d,%d,%.4f,%s,%d\n",
+            "%s,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,"
+            "%.3f,%.3f,%d,%d,%d,%.4f,%s,%d\n",
             r->scene, r->nprims, r->tris, r->users, r->ear_clipped, r->rays, r->rate_embree,
             r->rate_bspray, r->rate_embree > 0.0 ? r->rate_bspray / r->rate_embree : 0.0,
             agree_pct(&r->agree), r->agree.hit_miss, r->agree.t_differs, r->agree.other_prim,
@@ -1057,8 +1056,7 @@ static void csv_row(FILE *f, const result *r, const options *o)
     fflush(f);
 }
 
-/* --- main
- * ------------------------------------------------------------------------------------------ */
+/* --- main ---------------------------------------------------------------------------------- */
 
 /* Parses ARGV into *O; returns -1 to go on, else the exit status. */
 static int parse_args(int argc, char **argv, options *o)
@@ -1157,7 +1155,7 @@ int main(int argc, char **argv)
     print_header(dev, &o);
     int status = 0;
     for (size_t i = 0; i < o.nscenes; i++) {
-        result rows[4], r;
+        result rows[4];
         int nrows;
         if (run_scene(&o, dev, o.scenes[i], rows, &nrows)) {
             status = 1;
@@ -1168,16 +1166,16 @@ int main(int argc, char **argv)
             if (csv)
                 csv_row(csv, &rows[k], &o);
         }
-        r = rows[0];
-        if (r.forced_ears)
-            fprintf(stderr, "%s: %s: %zu ears forced in degenerate polygons\n", prog, r.scene,
-                    r.forced_ears);
-        if ((double)r.agree.disagree > MAX_DISAGREEMENT * (double)r.agree.rays) {
+        const result *r = &rows[0]; /* every ray; the parts are subsets of it */
+        if (r->forced_ears)
+            fprintf(stderr, "%s: %s: %zu ears forced in degenerate polygons\n", prog, r->scene,
+                    r->forced_ears);
+        if ((double)r->agree.disagree > MAX_DISAGREEMENT * (double)r->agree.rays) {
             fprintf(stderr,
                     "%s: %s: %zu of %zu rays disagree (%zu hit/miss, %zu t): more than 1%%, "
                     "a conversion bug?\n",
-                    prog, r.scene, r.agree.disagree, r.agree.rays, r.agree.hit_miss,
-                    r.agree.t_differs);
+                    prog, r->scene, r->agree.disagree, r->agree.rays, r->agree.hit_miss,
+                    r->agree.t_differs);
             if (status == 0)
                 status = 2;
         }
