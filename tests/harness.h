@@ -21,7 +21,7 @@ void harness_register(const char *name, const char *file, test_fn fn);
 void harness_fail(const char *file, int line, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 /* Marks the current test skipped (with a reason) and ends it. */
-void harness_skip(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+void harness_skip(const char *fmt, ...) __attribute__((format(printf, 1, 2), noreturn));
 /* Ends the current test (after a failed REQUIRE). */
 void harness_abort_test(void) __attribute__((noreturn));
 /* Path of ../shared relative to the repository, or NULL when it is absent. */

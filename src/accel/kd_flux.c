@@ -119,13 +119,14 @@ bsp_status kd_flux_build(kd_flux *f, const bsp_box *box, const kd_flux_segment *
         f->cs[k] = e[k] > 0.0 ? e[k] / f->n[k] : 1.0; /* a flat axis: any positive size */
     size_t nvox = (size_t)f->n[0] * (size_t)f->n[1] * (size_t)f->n[2];
     const size_t n0 = (size_t)f->n[0], n1 = (size_t)f->n[1], n2 = (size_t)f->n[2];
-    double *acc = calloc(4 * nvox, sizeof *acc), *ends = acc + 3 * nvox;
+    double *acc = calloc(4 * nvox, sizeof *acc);
     f->ends = calloc((n0 + 1) * (n1 + 1) * (n2 + 1), sizeof *f->ends);
     if (!acc || !f->ends) {
         free(acc);
         kd_flux_free(f);
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory");
     }
+    double *ends = acc + 3 * nvox; /* after the NULL test: no arithmetic on NULL */
     for (size_t i = 0; i < n; i++)
         walk_segment(f, &seg[i], acc, ends);
     /* 3D prefix sums of the end points: Q[i][j][l] = the points in the

@@ -141,6 +141,7 @@ static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n,
     bsp_status st = kd_sah_build_node(b, 0, t->box, root, 3 * m, 0, 0, b->surface, &cost);
     st = kd_sah_finish_tasks(b, st);
     *raised = tasks.raised;
+    b->tasks = NULL; /* TASKS lives in this frame only */
     kd_sah_scratch_free(b);
     return st;
 }

@@ -1140,6 +1140,7 @@ int main(int argc, char **argv)
     FILE *csv = NULL;
     if (o.csv_path && !(csv = fopen(o.csv_path, "w"))) {
         fprintf(stderr, "%s: %s: %s\n", prog, o.csv_path, strerror(errno));
+        free(o.given);
         return 1;
     }
     if (csv)
@@ -1149,6 +1150,9 @@ int main(int argc, char **argv)
     RTCDevice dev = rtcNewDevice(config);
     if (!dev) {
         fprintf(stderr, "%s: rtcNewDevice failed (error %d)\n", prog, (int)rtcGetDeviceError(NULL));
+        if (csv)
+            fclose(csv);
+        free(o.given);
         return 1;
     }
     rtcSetDeviceErrorFunction(dev, embree_error, NULL);
