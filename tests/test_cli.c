@@ -948,3 +948,31 @@ TEST(cli_bench_names_the_cells_variants)
     CHECK_RUN(cmd, 2, "(known: naive, kaplan, sah, sah-per, sah-par, sah-mixed, grid, octree, "
                       "octree-cost, grid-bounds, grid-rec)");
 }
+
+/* render --pixel-order: tiles and rows write the same image (compared byte
+ * for byte, on two threads and one); a bad value exits 2 with its message. */
+TEST(cli_render_pixel_orders_write_the_same_image)
+{
+    char cmd[4096], a[512], b[512];
+    harness_tmp_path(a, sizeof a, "order-rows.png");
+    harness_tmp_path(b, sizeof b, "order-tiles.png");
+    snprintf(cmd, sizeof cmd,
+             "%s render spd:balls:1 --res 45 --pixel-order rows --threads 1 -o %s 2>&1",
+             harness_cli(), a);
+    CHECK_RUN(cmd, 0, "PrimaryRay");
+    snprintf(cmd, sizeof cmd,
+             "%s render spd:balls:1 --res 45 --pixel-order tiles --threads 2 -o %s 2>&1",
+             harness_cli(), b);
+    CHECK_RUN(cmd, 0, "PrimaryRay");
+    FILE *f = fopen(a, "rb"), *g = fopen(b, "rb");
+    REQUIRE(f && g);
+    static unsigned char x[1 << 16], y[1 << 16];
+    size_t nx = fread(x, 1, sizeof x, f), ny = fread(y, 1, sizeof y, g);
+    fclose(f);
+    fclose(g);
+    CHECK(nx > 100 && nx < sizeof x);
+    CHECK(nx == ny && memcmp(x, y, nx) == 0);
+    snprintf(cmd, sizeof cmd, "%s render spd:balls:1 --pixel-order diagonal -o %s 2>&1",
+             harness_cli(), a);
+    CHECK_RUN(cmd, 2, "option '--pixel-order' takes tiles or rows, got 'diagonal'");
+}

@@ -227,3 +227,124 @@ TEST(render_refraction_through_glass_sphere)
     bsp_image_destroy(img);
     bsp_scene_destroy(s);
 }
+
+/* Renders S at 37 x 23 rays (tiles of 16 x 16 leave partial tiles on both
+ * edges) in ORDER on THREADS threads, with the per-pixel costs in COSTS. */
+static bsp_image *render_in(const bsp_accel *a, bsp_pixel_order order, int threads,
+                            bsp_render_stats *st, bsp_query_counters *costs)
+{
+    bsp_render_options o;
+    bsp_render_options_defaults(&o);
+    o.width = 37;
+    o.height = 23;
+    o.threads = threads;
+    o.pixel_order = order;
+    o.pixel_costs = costs;
+    o.pixel_costs_count = 37 * 23;
+    bsp_image *img = NULL;
+    bsp_error err;
+    REQUIRE(bsp_render(a, &o, &img, st, &err) == BSP_OK);
+    return img;
+}
+
+TEST(render_tiles_and_rows_give_the_same_image_and_counts)
+{
+    bsp_scene *s = shadow_scene(0.5);
+    bsp_accel *a = NULL;
+    bsp_error err;
+    REQUIRE(bsp_accel_build(s, NULL, &a, &err) == BSP_OK);
+    static bsp_query_counters rows_costs[37 * 23], costs[37 * 23];
+    bsp_render_stats ref, st;
+    bsp_image *rows = render_in(a, BSP_PIXELS_ROWS, 1, &ref, rows_costs);
+    CHECK(ref.cls[BSP_RAY_SECONDARY].rays > 0); /* the floor reflects */
+    for (int threads = 1; threads <= 2; threads++) {
+        bsp_image *img = render_in(a, BSP_PIXELS_TILES, threads, &st, costs);
+        CHECK(memcmp(img->rgb, rows->rgb, sizeof(float) * 3 * 37 * 23) == 0);
+        for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
+            CHECK_EQ_INT(st.cls[c].rays, ref.cls[c].rays);
+            CHECK_EQ_INT(st.cls[c].hits, ref.cls[c].hits);
+            CHECK_EQ_INT(st.cls[c].isect_tests, ref.cls[c].isect_tests);
+            CHECK_EQ_INT(st.cls[c].traversal_steps, ref.cls[c].traversal_steps);
+        }
+        int same = 0;
+        for (int i = 0; i < 37 * 23; i++)
+            same += costs[i].rays == rows_costs[i].rays &&
+                    costs[i].isect_tests == rows_costs[i].isect_tests &&
+                    costs[i].traversal_steps == rows_costs[i].traversal_steps;
+        CHECK_EQ_INT(same, 37 * 23);
+        bsp_image_destroy(img);
+    }
+    bsp_image_destroy(rows);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}
+
+typedef struct primary_log {
+    bsp_ray rays[37 * 23 + 1];
+    int n;
+} primary_log;
+
+static void log_primary_ray(bsp_ray_class cls, const bsp_ray *ray, uint32_t from, void *ctx)
+{
+    (void)from;
+    primary_log *l = ctx;
+    if (cls == BSP_RAY_PRIMARY && l->n <= 37 * 23)
+        l->rays[l->n++] = *ray;
+}
+
+static int same_ray(const bsp_ray *a, const bsp_ray *b)
+{
+    return memcmp(&a->org, &b->org, sizeof a->org) == 0 &&
+           memcmp(&a->dir, &b->dir, sizeof a->dir) == 0;
+}
+
+/* One thread: tiles row by row, rows in scanline order; an unknown order is refused. */
+TEST(render_pixel_orders_trace_in_their_documented_sequence)
+{
+    bsp_scene *s = shadow_scene(0);
+    bsp_accel *a = NULL;
+    bsp_error err;
+    REQUIRE(bsp_accel_build(s, NULL, &a, &err) == BSP_OK);
+    camera_rays cr;
+    camera_rays_init(&cr, bsp_scene_camera(s), 37, 23, BSP_SAMPLING_SPD, 0.0);
+    static primary_log log;
+    for (int order = 0; order < 2; order++) {
+        bsp_render_options o;
+        bsp_render_options_defaults(&o);
+        o.width = 37;
+        o.height = 23;
+        o.threads = 1;
+        o.max_depth = 0;
+        o.pixel_order = order ? BSP_PIXELS_ROWS : BSP_PIXELS_TILES;
+        o.ray_log = log_primary_ray;
+        o.ray_log_ctx = &log;
+        log.n = 0;
+        bsp_image *img = NULL;
+        REQUIRE(bsp_render(a, &o, &img, NULL, &err) == BSP_OK);
+        bsp_image_destroy(img);
+        CHECK_EQ_INT(log.n, 37 * 23);
+        /* the expected order, by hand: tiles of 16 x 16 in rows of tiles
+         * (widths 16, 16, 5; heights 16, 7), each row by row */
+        int k = 0, in_order = 0, tile = order ? 37 : BSP_RENDER_TILE, tile_h = order ? 1 : tile;
+        for (int ty = 0; ty < 23; ty += tile_h)
+            for (int tx = 0; tx < 37; tx += tile)
+                for (int y = ty; y < ty + tile_h && y < 23; y++)
+                    for (int x = tx; x < tx + tile && x < 37; x++) {
+                        bsp_ray want = camera_ray(&cr, x, y);
+                        in_order += k < log.n && same_ray(&log.rays[k], &want);
+                        k++;
+                    }
+        CHECK_EQ_INT(k, 37 * 23);
+        CHECK_EQ_INT(in_order, 37 * 23);
+    }
+    /* and an order that is neither is refused */
+    bsp_render_options o;
+    bsp_render_options_defaults(&o);
+    o.pixel_order = (bsp_pixel_order)7;
+    bsp_image *img = NULL;
+    CHECK(bsp_render(a, &o, &img, NULL, &err) == BSP_ERR_INVALID);
+    CHECK(img == NULL);
+    CHECK(strstr(err.message, "pixel order 7") != NULL);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}

@@ -152,6 +152,7 @@ int cmd_ab(int argc, char **argv)
     ro.width = ro.height = res;
     ro.max_depth = all ? depth : 0;
     ro.threads = 1;
+    ro.pixel_order = BSP_PIXELS_ROWS; /* the rays row by row, as bench records them */
     ro.ray_log = bench_log_ray;
     ro.ray_log_ctx = sets;
     bsp_image *img = NULL;

@@ -31,7 +31,8 @@ static const char render_usage[] =
     "bspray render SCENE [-o OUT.png|OUT.ppm] [--res N | --size WxH] [--depth N]\n"
     "                    [--sampling spd|centres] [--accel METHOD] [--mailbox on|off]\n"
     "                    [--max-depth N] [--leaf-size N] [--mixed-share F]\n"
-    "                    [--threads N] [--stats-json FILE] [--save-rays PREFIX] [--quiet]\n"
+    "                    [--threads N] [--pixel-order tiles|rows] [--stats-json FILE]\n"
+    "                    [--save-rays PREFIX] [--quiet]\n"
     "                    [--cost-map FILE.png [--cost-measure steps|tests|leaves|rays]]\n"
     "                    [--eye X,Y,Z] [--at X,Y,Z | --dir X,Y,Z] [--up X,Y,Z] [--fov DEG]\n"
     "                    [--ortho W|auto] [--tree FILE]";
@@ -58,13 +59,18 @@ static const char render_help[] =
     "                     and refracted rays while below N (default 4, the paper's and\n"
     "                     Havran's setting; the SPD Readme calls it depth 5)\n"
     "  --threads N        worker threads (default: all cores); the image does not depend on it\n"
+    "  --pixel-order O    tiles (default): the threads take 16 x 16 tiles of the image,\n"
+    "                     whose neighbouring rays keep a thread's caches and branch\n"
+    "                     predictor warm (5-10 % faster); rows: whole rows, the scanline\n"
+    "                     order with one thread. The image and the statistics are the same\n"
+    "                     either way\n"
     "  --stats-json FILE  also write the statistics as JSON\n"
     "  --save-rays PREFIX also write every ray the render casts, in the format of\n"
     "                     'bspray trace' ('ox oy oz dx dy dz tmin tmax from', %.17g), one\n"
     "                     file per class: PREFIX-primary.txt, PREFIX-shadow.txt (replay\n"
     "                     with 'trace --any') and PREFIX-secondary.txt; the render then\n"
     "                     runs on one thread, so the files list the rays in the order\n"
-    "                     they are cast\n"
+    "                     they are cast (row by row unless --pixel-order tiles is given)\n"
     "  --cost-map FILE    also draw where the work went: each pixel coloured by what its\n"
     "                     rays cost (the primary ray and every ray it spawned), from dark\n"
     "                     (none) to bright (the most), beside a colour bar with the scale;\n"
@@ -265,6 +271,7 @@ static int cmd_render(int argc, char **argv)
 {
     args a = {argc, 1, argv, render_usage, NULL};
     const char *scene_path = NULL, *out_path = "out.png", *json_path = NULL, *rays_prefix = NULL;
+    int order_given = 0; /* --pixel-order given: --save-rays keeps it */
     const char *cost_path = NULL, *tree_path = NULL;
     costmap_measure cost_measure = COSTMAP_STEPS;
     int quiet = 0;
@@ -297,6 +304,15 @@ static int cmd_render(int argc, char **argv)
             ropts.max_depth = parse_int(&a, s, 0, 64);
         } else if (!strcmp(s, "--threads")) {
             ropts.threads = parse_int(&a, s, 1, 256);
+        } else if (!strcmp(s, "--pixel-order")) {
+            const char *v = opt_value(&a, s);
+            if (!strcmp(v, "tiles"))
+                ropts.pixel_order = BSP_PIXELS_TILES;
+            else if (!strcmp(v, "rows"))
+                ropts.pixel_order = BSP_PIXELS_ROWS;
+            else
+                die_usage(a.usage, "option '--pixel-order' takes tiles or rows, got '%s'", v);
+            order_given = 1;
         } else if (!strcmp(s, "--sampling")) {
             const char *v = opt_value(&a, s);
             if (!strcmp(v, "spd"))
@@ -366,7 +382,9 @@ static int cmd_render(int argc, char **argv)
         }
         ropts.ray_log = save_ray;
         ropts.ray_log_ctx = &rf;
-        ropts.threads = 1; /* the rays in the order they are cast */
+        ropts.threads = 1; /* the rays in the order they are cast, */
+        if (!order_given)
+            ropts.pixel_order = BSP_PIXELS_ROWS; /* row by row (docs/renderer.md) */
     }
     bsp_accel *accel = tree_or_build(&a, scene, &bopts, tree_path);
     progress_ctx pc = {progress_create(stderr, "render")};

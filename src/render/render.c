@@ -28,9 +28,10 @@
  * that cannot meet the primitive it leaves again is cast without it
  * (bsp_intersect_from, origin_prim below).
  *
- * Threads take rows from a shared counter; every pixel depends only on its
- * own rays, so the image is identical for any thread count. Counters live in
- * per-thread state and are summed at the end.
+ * Threads take tiles (or rows: bsp_pixel_order) from a shared counter;
+ * every pixel depends only on its own rays, so the image is identical for
+ * any thread count and either order. Counters live in per-thread state and
+ * are summed at the end.
  */
 #include <math.h>
 #include <pthread.h>
@@ -61,8 +62,10 @@ typedef struct render_job {
     bsp_image *img;
     double eps;             /* absolute offset of secondary rays */
     double light_intensity; /* per light, and ambient */
-    atomic_int next_row;
-    atomic_int rows_done;
+    int tile_w, tile_h;     /* the pieces handed out: tiles, or rows (width x 1) */
+    int tiles_x, ntiles;    /* pieces across, and in all */
+    atomic_int next_tile;
+    atomic_int tiles_done;
 } render_job;
 
 typedef struct worker {
@@ -252,17 +255,15 @@ static void counters_since(bsp_query_counters *to, const bsp_query_counters *now
     to->mailbox_hits = now->mailbox_hits - before->mailbox_hits;
 }
 
-static void render_rows(worker *w)
+/* Traces the pixels of [X0, X1) x [Y0, Y1) row by row. */
+static void render_piece(worker *w, int x0, int x1, int y0, int y1)
 {
     render_job *job = w->job;
-    int width = job->img->width, height = job->img->height;
+    int width = job->img->width;
     bsp_query_counters *costs = job->opts->pixel_costs;
-    for (;;) {
-        int y = atomic_fetch_add(&job->next_row, 1);
-        if (y >= height)
-            break;
+    for (int y = y0; y < y1; y++) {
         float *row = job->img->rgb + (size_t)y * (size_t)width * 3;
-        for (int x = 0; x < width; x++) {
+        for (int x = x0; x < x1; x++) {
             bsp_ray r = camera_ray(&job->cam, x, y);
             double c[3];
             if (costs) {
@@ -276,15 +277,31 @@ static void render_rows(worker *w)
             for (int k = 0; k < 3; k++)
                 row[3 * x + k] = (float)c[k];
         }
-        int done = atomic_fetch_add(&job->rows_done, 1) + 1;
+    }
+}
+
+/* Takes pieces (tiles or rows) from the job's counter until none is left. */
+static void render_pieces(worker *w)
+{
+    render_job *job = w->job;
+    int width = job->img->width, height = job->img->height;
+    for (;;) {
+        int i = atomic_fetch_add(&job->next_tile, 1);
+        if (i >= job->ntiles)
+            break;
+        int x0 = (i % job->tiles_x) * job->tile_w, y0 = (i / job->tiles_x) * job->tile_h;
+        int x1 = x0 + job->tile_w < width ? x0 + job->tile_w : width;
+        int y1 = y0 + job->tile_h < height ? y0 + job->tile_h : height;
+        render_piece(w, x0, x1, y0, y1);
+        int done = atomic_fetch_add(&job->tiles_done, 1) + 1;
         if (w->is_main && job->opts->progress)
-            job->opts->progress((double)done / (double)height, job->opts->progress_ctx);
+            job->opts->progress((double)done / (double)job->ntiles, job->opts->progress_ctx);
     }
 }
 
 static void *worker_main(void *arg)
 {
-    render_rows(arg);
+    render_pieces(arg);
     return NULL;
 }
 
@@ -349,6 +366,9 @@ bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts_in,
             return error_set(err, BSP_ERR_INVALID, NULL, 0,
                              "the orthographic window width must be positive and finite");
     }
+    if (opts.pixel_order != BSP_PIXELS_TILES && opts.pixel_order != BSP_PIXELS_ROWS)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "pixel order %d is not one of %d, %d",
+                         (int)opts.pixel_order, BSP_PIXELS_TILES, BSP_PIXELS_ROWS);
     if (opts.max_depth < 0 || opts.max_depth > 64)
         return error_set(err, BSP_ERR_INVALID, NULL, 0, "ray depth %d is outside 0..64",
                          opts.max_depth);
@@ -381,8 +401,16 @@ bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts_in,
     job.eps = RAY_EPS_REL * scene_scale(s);
     size_t nl = bsp_scene_light_count(s);
     job.light_intensity = nl ? 1.0 / (2.0 * sqrt((double)nl)) : 0.5;
-    atomic_init(&job.next_row, 0);
-    atomic_init(&job.rows_done, 0);
+    if (opts.pixel_order == BSP_PIXELS_ROWS) {
+        job.tile_w = width;
+        job.tile_h = 1;
+    } else {
+        job.tile_w = job.tile_h = BSP_RENDER_TILE;
+    }
+    job.tiles_x = (width + job.tile_w - 1) / job.tile_w;
+    job.ntiles = job.tiles_x * ((height + job.tile_h - 1) / job.tile_h);
+    atomic_init(&job.next_tile, 0);
+    atomic_init(&job.tiles_done, 0);
 
     worker *workers = calloc((size_t)threads, sizeof *workers);
     pthread_t *tids = calloc((size_t)threads, sizeof *tids);
@@ -402,7 +430,7 @@ bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts_in,
         for (; started < threads; started++)
             if (pthread_create(&tids[started], NULL, worker_main, &workers[started]) != 0)
                 break; /* fewer threads is still a correct render */
-        render_rows(&workers[0]);
+        render_pieces(&workers[0]);
         for (int i = 1; i < started; i++)
             pthread_join(tids[i], NULL);
     }

@@ -48,7 +48,7 @@ static const char *const default_scenes[] = {
 
 static const char usage[] =
     "usage: bspray-embree [SCENE...] [--res N] [--rounds R] [--threads N] [--csv FILE]\n"
-    "                     [--by-outcome] [--twice]\n"
+    "                     [--by-outcome] [--twice] [--pixel-order rows|tiles]\n"
     "\n"
     "Primary-ray throughput of bspray (SAH kd-tree, mailboxes: what `bspray bench`\n"
     "times) against Embree 3 (high-quality BVH, robust off, rtcIntersect1,\n"
@@ -71,6 +71,10 @@ static const char usage[] =
     "                 count rays, so a ray's time covers both shots. Against a run\n"
     "                 without it, it shows what the second shot costs, with the\n"
     "                 ray's nodes in the caches and its branches just seen\n"
+    "  --pixel-order O  the order of the rays, the same for both tracers: rows\n"
+    "                 (default, the order of every earlier session: row by row of\n"
+    "                 the image) or tiles (16 x 16 tiles, each row by row: the order\n"
+    "                 in which 'bspray render' traces)\n"
     "  --help         this text\n"
     "\n"
     "Prints a Markdown table (progress on stderr). Exit status 1 on bad arguments or\n"
@@ -84,6 +88,7 @@ typedef struct options {
     const char *csv_path;
     int by_outcome; /* --by-outcome */
     int shots;      /* queries per ray in a timed pass: 1, or 2 with --twice */
+    bsp_pixel_order order; /* --pixel-order: the order the rays are recorded and shot in */
 } options;
 
 /* --- small utilities ---------------------------------------------------------------- */
@@ -157,13 +162,14 @@ static void record_primary(bsp_ray_class cls, const bsp_ray *ray, uint32_t from,
 
 /* The primary rays of a RES x RES render of ACCEL's scene (depth 0: primary
  * and shadow rays only, the fewest that still give every primary ray). */
-static int record_rays(const bsp_accel *accel, int res, ray_list *out)
+static int record_rays(const bsp_accel *accel, int res, bsp_pixel_order order, ray_list *out)
 {
     bsp_render_options ro;
     bsp_render_options_defaults(&ro);
     ro.width = ro.height = res;
     ro.max_depth = 0;
     ro.threads = 1;
+    ro.pixel_order = order; /* rows: screen order, as in every session before 43 */
     ro.ray_log = record_primary;
     ro.ray_log_ctx = out;
     bsp_image *img = NULL;
@@ -983,7 +989,7 @@ static int run_scene(const options *o, RTCDevice dev, const char *name, result r
     ray_list rl = {NULL, 0, 0};
     bsp_query *q = bsp_query_create(accel);
     int status = 1;
-    if (q && record_rays(accel, o->res, &rl)) {
+    if (q && record_rays(accel, o->res, o->order, &rl)) {
         r->rays = rl.n;
         struct RTCRay *erays = embree_rays(&rl);
         fprintf(stderr, "%s: %s: %zu primary rays; checking agreement\n", prog, name, rl.n);
@@ -1020,6 +1026,8 @@ static void print_header(RTCDevice dev, const options *o)
            o->res, o->res, o->rounds,
            o->shots == 2 ? "; every ray shot twice in a row (--twice), its time covering both"
                          : "");
+    if (o->order == BSP_PIXELS_TILES)
+        printf("The rays in 16 x 16 tiles of the image, each row by row (--pixel-order tiles).\n\n");
     printf("| scene | prims | Embree tris / user | rays | Embree Mrays/s | bspray Mrays/s "
            "| bspray/Embree | median round ratio | agree %% | build ms Embree / bspray |\n");
     printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
@@ -1041,18 +1049,18 @@ static const char csv_header[] =
     "scene,prims,embree_triangles,embree_user_prims,ear_clipped_polygons,rays,"
     "embree_mrays_s,bspray_mrays_s,ratio_bspray_embree,agree_pct,disagree_hit_miss,"
     "disagree_t,same_t_other_prim,build_ms_embree,build_ms_bspray,res,rounds,threads,"
-    "ratio_median_round,rays_part,shots\n";
+    "ratio_median_round,rays_part,shots,pixel_order\n";
 
 static void csv_row(FILE *f, const result *r, const options *o)
 {
     fprintf(f,
             "%s,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,"
-            "%.3f,%.3f,%d,%d,%d,%.4f,%s,%d\n",
+            "%.3f,%.3f,%d,%d,%d,%.4f,%s,%d,%s\n",
             r->scene, r->nprims, r->tris, r->users, r->ear_clipped, r->rays, r->rate_embree,
             r->rate_bspray, r->rate_embree > 0.0 ? r->rate_bspray / r->rate_embree : 0.0,
             agree_pct(&r->agree), r->agree.hit_miss, r->agree.t_differs, r->agree.other_prim,
             1e3 * r->build_embree, 1e3 * r->build_bspray, o->res, o->rounds, o->threads,
-            r->ratio_median, r->part, o->shots);
+            r->ratio_median, r->part, o->shots, o->order == BSP_PIXELS_TILES ? "tiles" : "rows");
     fflush(f);
 }
 
@@ -1070,6 +1078,7 @@ static int parse_args(int argc, char **argv, options *o)
     o->shots = 1;
     o->csv_path = NULL;
     o->by_outcome = 0;
+    o->order = BSP_PIXELS_ROWS;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         int has_value = i + 1 < argc;
@@ -1091,6 +1100,16 @@ static int parse_args(int argc, char **argv, options *o)
             o->shots = 2;
         } else if (!strcmp(a, "--by-outcome")) {
             o->by_outcome = 1;
+        } else if (!strcmp(a, "--pixel-order") && has_value) {
+            const char *v = argv[++i];
+            if (!strcmp(v, "rows"))
+                o->order = BSP_PIXELS_ROWS;
+            else if (!strcmp(v, "tiles"))
+                o->order = BSP_PIXELS_TILES;
+            else
+                return fprintf(stderr, "%s: --pixel-order wants rows or tiles, not '%s'\n", prog,
+                               v),
+                       1;
         } else if (a[0] == '-' && a[1]) {
             fprintf(stderr, "%s: unknown option or missing value: '%s'\n%s", prog, a, usage);
             return 1;
