@@ -61,7 +61,7 @@ static const char render_help[] =
     "  --threads N        worker threads (default: all cores); the image does not depend on it\n"
     "  --pixel-order O    tiles (default): the threads take 16 x 16 tiles of the image,\n"
     "                     whose neighbouring rays keep a thread's caches and branch\n"
-    "                     predictor warm (5-10 % faster); rows: whole rows, the scanline\n"
+    "                     predictor warm (5-12 % faster); rows: whole rows, the scanline\n"
     "                     order with one thread. The image and the statistics are the same\n"
     "                     either way\n"
     "  --stats-json FILE  also write the statistics as JSON\n"

@@ -86,7 +86,7 @@ typedef enum bsp_pixel_order {
      * the right and bottom edges), taken by the threads in rows of tiles and
      * each traced row by row. Neighbouring rays take nearly the same path
      * through a tree, so a tile keeps a thread's caches and branch predictor
-     * warm: primary rays 5-10 % faster than in rows on the SPD scenes and
+     * warm: renders 5-12 % faster than in rows on most SPD scenes and
      * the Stanford dragon (docs/renderer.md, "Pixel order"). */
     BSP_PIXELS_TILES = 0,
     /* Whole rows, taken by the threads in turn; with one thread the image's
