@@ -88,7 +88,8 @@ static void print_help(void)
            "the render); T_TR render seconds on 1 and N threads (the best of --repeat renders);\n"
            "Mrays/s of pure ray shooting per class on 1 and N threads (the best of 3 passes\n"
            "over the recorded rays, recorded row by row of the image, each pixel's rays depth\n"
-           "first; the renders of T_TR trace 16 x 16 tiles). On 1 thread times are its CPU\n"
+           "first; the renders of T_TR trace " STRINGIFY(BSP_RENDER_TILE) " x " STRINGIFY(
+               BSP_RENDER_TILE) " tiles). On 1 thread times are its CPU\n"
            "time, on N threads the wall clock.\n",
            bench_usage, NAIVE_DEFAULT_MAX_PRIMS);
 }

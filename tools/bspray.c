@@ -59,7 +59,8 @@ static const char render_help[] =
     "                     and refracted rays while below N (default 4, the paper's and\n"
     "                     Havran's setting; the SPD Readme calls it depth 5)\n"
     "  --threads N        worker threads (default: all cores); the image does not depend on it\n"
-    "  --pixel-order O    tiles (default): the threads take 16 x 16 tiles of the image,\n"
+    "  --pixel-order O    tiles (default): the threads take " STRINGIFY(BSP_RENDER_TILE) " x " STRINGIFY(
+        BSP_RENDER_TILE) " tiles of the image,\n"
     "                     whose neighbouring rays keep a thread's caches and branch\n"
     "                     predictor warm (5-12 % faster); rows: whole rows, the scanline\n"
     "                     order with one thread. The image and the statistics are the same\n"

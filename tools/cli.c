@@ -465,9 +465,6 @@ static double *cost_field(bsp_sah_costs *c, const char *name, size_t len)
     return NULL;
 }
 
-#define STRINGIFY_TEXT(x) #x
-#define STRINGIFY(x) STRINGIFY_TEXT(x)
-
 /* --costs NAME=X[,NAME=X...]: the SAH's C_trav and T_i, each in
  * [BSP_SAH_COST_MIN, BSP_SAH_COST_MAX]; names not given keep their defaults
  * (0 in the options). */

@@ -33,6 +33,10 @@ const char *opt_value(args *a, const char *opt);
 int output_path_writable(const char *path);
 /* A whole number in [LO, HI] as the value of OPT, or a usage error. */
 int parse_int(args *a, const char *opt, long lo, long hi);
+/* The expansion of macro X as a string literal (a constant inside help texts). */
+#define STRINGIFY_TEXT(x) #x
+#define STRINGIFY(x) STRINGIFY_TEXT(x)
+
 int parse_on_off(args *a, const char *opt);
 /* 0 when the value of OPT is W0, 1 when it is W1, or a usage error. */
 int parse_one_of_two(args *a, const char *opt, const char *w0, const char *w1);

@@ -73,8 +73,8 @@ static const char usage[] =
     "                 ray's nodes in the caches and its branches just seen\n"
     "  --pixel-order O  the order of the rays, the same for both tracers: rows\n"
     "                 (default, the order of every earlier session: row by row of\n"
-    "                 the image) or tiles (16 x 16 tiles, each row by row: the order\n"
-    "                 in which 'bspray render' traces)\n"
+    "                 the image) or tiles (the square tiles 'bspray render' traces,\n"
+    "                 each row by row)\n"
     "  --help         this text\n"
     "\n"
     "Prints a Markdown table (progress on stderr). Exit status 1 on bad arguments or\n"
@@ -1027,7 +1027,8 @@ static void print_header(RTCDevice dev, const options *o)
            o->shots == 2 ? "; every ray shot twice in a row (--twice), its time covering both"
                          : "");
     if (o->order == BSP_PIXELS_TILES)
-        printf("The rays in 16 x 16 tiles of the image, each row by row (--pixel-order tiles).\n\n");
+        printf("The rays in %d x %d tiles of the image, each row by row (--pixel-order tiles).\n\n",
+               BSP_RENDER_TILE, BSP_RENDER_TILE);
     printf("| scene | prims | Embree tris / user | rays | Embree Mrays/s | bspray Mrays/s "
            "| bspray/Embree | median round ratio | agree %% | build ms Embree / bspray |\n");
     printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
