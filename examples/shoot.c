@@ -36,6 +36,9 @@ int main(int argc, char **argv)
         bsp_scene_destroy(scene);
         return 1;
     }
+    int status = 1;
+    bsp_ray *rays = NULL;
+    bsp_hit *hits = NULL;
     const bsp_camera *cam = bsp_scene_camera(scene);
     bsp_vec3 eye = cam ? cam->from : bsp_v3(0, 0, 10), at = cam ? cam->at : bsp_v3(0, 0, 0);
     bsp_vec3 dir = bsp_v3(at.x - eye.x, at.y - eye.y, at.z - eye.z);
@@ -44,7 +47,7 @@ int main(int argc, char **argv)
     bsp_query *q = bsp_query_create(accel);
     if (!q) {
         fprintf(stderr, "shoot: out of memory\n");
-        return 1;
+        goto done;
     }
     bsp_ray ray = {eye, dir, 0.0, INFINITY};
     bsp_hit hit;
@@ -66,11 +69,11 @@ int main(int argc, char **argv)
     bsp_query_destroy(q);
 
     /* a batch: a G x G grid of rays from the eye around the centre ray */
-    bsp_ray *rays = malloc((size_t)G * G * sizeof *rays);
-    bsp_hit *hits = malloc((size_t)G * G * sizeof *hits);
+    rays = malloc((size_t)G * G * sizeof *rays);
+    hits = malloc((size_t)G * G * sizeof *hits);
     if (!rays || !hits) {
         fprintf(stderr, "shoot: out of memory\n");
-        return 1;
+        goto done;
     }
     /* R and U: perpendicular to DIR and to each other, each as long as DIR,
      * so the grid spans about 53 degrees */
@@ -84,7 +87,7 @@ int main(int argc, char **argv)
            ul = sqrt(u.x * u.x + u.y * u.y + u.z * u.z);
     if (!(rl > 0.0 && ul > 0.0)) { /* UP along DIR: any other axis will do */
         fprintf(stderr, "shoot: the view direction is parallel to up\n");
-        return 1;
+        goto done;
     }
     for (int j = 0; j < G; j++)
         for (int i = 0; i < G; i++) {
@@ -96,16 +99,18 @@ int main(int argc, char **argv)
     bsp_query_counters c;
     if (bsp_intersect_batch(accel, rays, NULL, (size_t)G * G, 0, hits, &c, &err) != BSP_OK) {
         fprintf(stderr, "shoot: %s\n", err.message);
-        return 1;
+        goto done;
     }
     size_t n_hit = 0;
     for (size_t i = 0; i < (size_t)G * G; i++)
         n_hit += hits[i].prim != BSP_NO_PRIM;
     printf("grid: %zu of %d rays hit; %.2f tests and %.2f traversal steps per ray\n", n_hit, G * G,
            (double)c.isect_tests / (double)c.rays, (double)c.traversal_steps / (double)c.rays);
+    status = 0;
+done: /* every way out frees what was made (free(NULL) does nothing) */
     free(rays);
     free(hits);
     bsp_accel_destroy(accel);
     bsp_scene_destroy(scene);
-    return 0;
+    return status;
 }

@@ -312,7 +312,8 @@ static void put(buf *b, const void *data, size_t n)
         b->p = np;
         b->cap = ncap;
     }
-    memcpy(b->p + b->len, data, n);
+    if (n) /* b->p is still NULL when the first piece is empty */
+        memcpy(b->p + b->len, data, n);
     b->len += n;
 }
 

@@ -220,7 +220,7 @@ lin_node(sah_build *b, const uint64_t *ev, size_t stride, size_t n, double tsum,
     if (total_chunks > 0) {
         if (!grow_u64((uint64_t **)&b->chunks, &b->chunks_cap,
                       total_chunks * (sizeof(lin_chunk) / sizeof(uint64_t))))
-            total_chunks = 0, nchunks[0] = nchunks[1] = nchunks[2] = 0; /* no pruning */
+            nchunks[0] = nchunks[1] = nchunks[2] = 0; /* no pruning */
         else
             ch = (lin_chunk *)b->chunks;
     }

@@ -251,17 +251,20 @@ static int looks_numeric(const token *t)
 
 /* --- errors ----------------------------------------------------------------- */
 
-static bsp_status fail(parser *P, bsp_status status, size_t line, const char *fmt, ...)
+static void fail_record(parser *P, bsp_status status, size_t line, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 
-static bsp_status fail(parser *P, bsp_status status, size_t line, const char *fmt, ...)
+/* Records a parse error on LINE and yields STATUS (see FAIL_WITH). */
+#define fail(P, status, line, ...) FAIL_WITH(status, fail_record((P), (status), (line), __VA_ARGS__))
+
+static void fail_record(parser *P, bsp_status status, size_t line, const char *fmt, ...)
 {
     char msg[BSP_ERROR_MESSAGE_SIZE];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    return error_set(P->err, status, P->name, line, "%s", msg);
+    error_record(P->err, status, P->name, line, "%s", msg);
 }
 
 /* WHAT (e.g. "'s' record") begun on line REC_LINE ended early at token T. */

@@ -543,17 +543,20 @@ typedef struct obj_parser {
     size_t ignored[OBJ_UNSUPPORTED], ignored_line[OBJ_UNSUPPORTED];
 } obj_parser;
 
-static bsp_status fail(obj_parser *P, bsp_status status, size_t line, const char *fmt, ...)
+static void fail_record(obj_parser *P, bsp_status status, size_t line, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 
-static bsp_status fail(obj_parser *P, bsp_status status, size_t line, const char *fmt, ...)
+/* Records a parse error on LINE and yields STATUS (see FAIL_WITH). */
+#define fail(P, status, line, ...) FAIL_WITH(status, fail_record((P), (status), (line), __VA_ARGS__))
+
+static void fail_record(obj_parser *P, bsp_status status, size_t line, const char *fmt, ...)
 {
     char msg[BSP_ERROR_MESSAGE_SIZE];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    return error_set(P->err, status, P->name, line, "%s", msg);
+    error_record(P->err, status, P->name, line, "%s", msg);
 }
 
 static int is_blank(char c)

@@ -144,42 +144,46 @@ typedef struct ply_parser {
 
 /* --- errors ---------------------------------------------------------------- */
 
-static bsp_status vfail(ply_parser *P, bsp_status status, int binary_offset, size_t where,
-                        const char *fmt, va_list ap)
+static void vfail_record(ply_parser *P, bsp_status status, int binary_offset, size_t where,
+                         const char *fmt, va_list ap)
 {
     char msg[BSP_ERROR_MESSAGE_SIZE];
     vsnprintf(msg, sizeof msg, fmt, ap);
     if (binary_offset)
-        return error_set(P->err, status, P->name, 0, "byte %zu: %s", where, msg);
-    return error_set(P->err, status, P->name, where, "%s", msg);
+        error_record(P->err, status, P->name, 0, "byte %zu: %s", where, msg);
+    else
+        error_record(P->err, status, P->name, where, "%s", msg);
 }
 
-/* A header error on LINE. */
-static bsp_status hfail(ply_parser *P, bsp_status status, size_t line, const char *fmt, ...)
+/* A header error on LINE; yields STATUS (see FAIL_WITH). */
+static void hfail_record(ply_parser *P, bsp_status status, size_t line, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
+#define hfail(P, status, line, ...)                                                            \
+    FAIL_WITH(status, hfail_record((P), (status), (line), __VA_ARGS__))
 
-static bsp_status hfail(ply_parser *P, bsp_status status, size_t line, const char *fmt, ...)
+static void hfail_record(ply_parser *P, bsp_status status, size_t line, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    bsp_status st = vfail(P, status, 0, line, fmt, ap);
+    vfail_record(P, status, 0, line, fmt, ap);
     va_end(ap);
-    return st;
 }
 
-/* A data error at byte offset OFF (binary) or on line LINE (ascii). */
-static bsp_status dfail(ply_parser *P, bsp_status status, size_t off, size_t line,
-                        const char *fmt, ...) __attribute__((format(printf, 5, 6)));
+/* A data error at byte offset OFF (binary) or on line LINE (ascii); yields
+ * STATUS. */
+static void dfail_record(ply_parser *P, bsp_status status, size_t off, size_t line,
+                         const char *fmt, ...) __attribute__((format(printf, 5, 6)));
+#define dfail(P, status, off, line, ...)                                                       \
+    FAIL_WITH(status, dfail_record((P), (status), (off), (line), __VA_ARGS__))
 
-static bsp_status dfail(ply_parser *P, bsp_status status, size_t off, size_t line,
-                        const char *fmt, ...)
+static void dfail_record(ply_parser *P, bsp_status status, size_t off, size_t line,
+                         const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
     int binary = P->fmt != FMT_ASCII;
-    bsp_status st = vfail(P, status, binary, binary ? off : line, fmt, ap);
+    vfail_record(P, status, binary, binary ? off : line, fmt, ap);
     va_end(ap);
-    return st;
 }
 
 #define SHOW(s, len, buf) mesh_show_token((s), (len), (buf), sizeof(buf))

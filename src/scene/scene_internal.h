@@ -113,14 +113,30 @@ struct bsp_scene {
 };
 
 /* Formats "NAME:LINE: message" (or just the message without a location)
- * into ERR and returns STATUS. */
-HIDDEN bsp_status scene_fail(const bsp_scene *s, bsp_error *err, bsp_status status,
-                             const char *fmt, ...) __attribute__((format(printf, 4, 5)));
+ * into ERR (when not NULL), with the scene's current source as the location. */
+HIDDEN void scene_fail_record(const bsp_scene *s, bsp_error *err, bsp_status status,
+                              const char *fmt, ...) __attribute__((format(printf, 4, 5)));
 
 /* Same, with an explicit location (NAME may be NULL). */
-HIDDEN bsp_status error_set(bsp_error *err, bsp_status status, const char *name,
-                            size_t line, const char *fmt, ...)
-    __attribute__((format(printf, 5, 6)));
+HIDDEN void error_record(bsp_error *err, bsp_status status, const char *name, size_t line,
+                         const char *fmt, ...) __attribute__((format(printf, 5, 6)));
+
+/* Runs RECORD, a call that records an error, and yields STATUS, for
+ * `return error_set(...)`. The error helpers are macros over this so that
+ * the failing status a caller returns is visible where it is returned: a
+ * static analyser that does not follow a call into another file, or into a
+ * variadic function, otherwise assumes it may return BSP_OK and follows
+ * paths no input can take. STATUS is evaluated twice; every caller passes a
+ * constant or a plain variable. A GNU statement expression (gcc and clang),
+ * so that a call whose status is not used does not warn. */
+#define FAIL_WITH(status, record)                                                              \
+    __extension__({                                                                            \
+        record;                                                                                \
+        (bsp_status)(status);                                                                  \
+    })
+#define scene_fail(s, err, status, ...)                                                        \
+    FAIL_WITH(status, scene_fail_record((s), (err), (status), __VA_ARGS__))
+#define error_set(err, status, ...) FAIL_WITH(status, error_record((err), (status), __VA_ARGS__))
 
 /* Adds a warning string (copied) unless the list is full. */
 HIDDEN void scene_warn(bsp_scene *s, const char *fmt, ...)

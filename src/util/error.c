@@ -26,11 +26,11 @@ const char *bsp_status_name(bsp_status status)
     return "unknown";
 }
 
-static bsp_status error_vset(bsp_error *err, bsp_status status, const char *name, size_t line,
-                             const char *fmt, va_list ap)
+static void error_vrecord(bsp_error *err, bsp_status status, const char *name, size_t line,
+                          const char *fmt, va_list ap)
 {
     if (!err)
-        return status;
+        return;
     err->status = status;
     int n = 0;
     if (name && line > 0)
@@ -40,25 +40,22 @@ static bsp_status error_vset(bsp_error *err, bsp_status status, const char *name
     if (n < 0 || (size_t)n >= sizeof err->message)
         n = 0;
     vsnprintf(err->message + n, sizeof err->message - (size_t)n, fmt, ap);
-    return status;
 }
 
-bsp_status error_set(bsp_error *err, bsp_status status, const char *name, size_t line,
-                     const char *fmt, ...)
+void error_record(bsp_error *err, bsp_status status, const char *name, size_t line,
+                  const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    error_vset(err, status, name, line, fmt, ap);
+    error_vrecord(err, status, name, line, fmt, ap);
     va_end(ap);
-    return status;
 }
 
-bsp_status scene_fail(const bsp_scene *s, bsp_error *err, bsp_status status, const char *fmt,
-                      ...)
+void scene_fail_record(const bsp_scene *s, bsp_error *err, bsp_status status, const char *fmt,
+                       ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    error_vset(err, status, s ? s->src_name : NULL, s ? s->src_line : 0, fmt, ap);
+    error_vrecord(err, status, s ? s->src_name : NULL, s ? s->src_line : 0, fmt, ap);
     va_end(ap);
-    return status;
 }
