@@ -37,6 +37,12 @@ EXAMPLE_SRC := $(sort $(wildcard examples/*.c))
 EXAMPLES    := $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%)
 # the same programs linked to the shared library (found beside them by rpath)
 EXAMPLES_SHARED := $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%-shared)
+# examples/*.cpp: the API from C++ (the public headers are extern "C"), built
+# with $(CXX) against the public static library
+EXAMPLE_CXX_SRC := $(sort $(wildcard examples/*.cpp))
+EXAMPLES        += $(EXAMPLE_CXX_SRC:examples/%.cpp=$(BUILD)/examples/%)
+CXX      ?= g++
+WARN_CXX := -Wall -Wextra -Wshadow -Wpedantic -Werror
 
 LIB   := $(BUILD)/libbspray.a
 # The shared library: position-independent copies of the library's objects,
@@ -101,6 +107,10 @@ $(TESTS): $(TEST_OBJ) $(LIB)
 $(BUILD)/examples/%: examples/%.c $(PUBLIC_LIB)
 	@mkdir -p $(dir $@)
 	$(CC) -std=c11 $(WARN) $(OPT) $(SAN) -pthread -Iinclude $(CFLAGS) $(LDFLAGS) -o $@ $< $(PUBLIC_LIB) $(LDLIBS)
+
+$(BUILD)/examples/%: examples/%.cpp $(PUBLIC_LIB)
+	@mkdir -p $(dir $@)
+	$(CXX) -std=c++11 $(WARN_CXX) $(OPT) $(SAN) -pthread -Iinclude $(CXXFLAGS) $(LDFLAGS) -o $@ $< $(PUBLIC_LIB) $(LDLIBS)
 
 # A program that defines functions and data named like the library's internal
 # ones, linked to the public static library: it links only if they are hidden.

@@ -1,7 +1,8 @@
 /*
  * test_examples.c — the programs of examples/, built against the public
  * headers alone (Makefile), linked to the static library and (NAME-shared)
- * to the shared one, run and checked against the naive method: the centre
+ * to the shared one (and shoot_cxx.cpp, the same program in C++), run and
+ * checked against the naive method: the centre
  * ray's primitive and t bit for bit, the shadow answer, and the number of
  * grid rays that hit. And the shared library's exports, against the
  * functions the public headers declare.
@@ -135,6 +136,15 @@ TEST(example_shoot_linked_to_the_shared_library_gives_the_naive_answers)
     check_shoot(example_path("shoot-shared", exe, sizeof exe));
 }
 
+/* examples/shoot_cxx.cpp: the same program in C++ (the public headers
+ * included as they are, built with -std=c++11 -Wpedantic), so the same
+ * check against the naive method */
+TEST(example_shoot_from_cplusplus_gives_the_naive_answers)
+{
+    char exe[1024];
+    check_shoot(example_path("shoot_cxx", exe, sizeof exe));
+}
+
 /* --- the shared library's exports ------------------------------------------------------ */
 
 /* A set of names, as one string "\nname1\nname2\n...". */
@@ -189,9 +199,15 @@ static void declared_functions(const char *h, name_set *out)
             continue;
         }
         line_start = *p == '\n' || (line_start && isspace((unsigned char)*p));
+        if (strncmp(p, "extern \"C\" {", 12) == 0) { /* C++'s linkage block: no scope */
+            p += 12;
+            continue;
+        }
         if (*p == '{')
             depth++;
-        else if (*p == '}') {
+        else if (*p == '}' && depth == 0) {
+            /* the close of the extern "C" block */
+        } else if (*p == '}') {
             depth--;
             if (depth == 0)
                 is_static = 0;

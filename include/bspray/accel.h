@@ -21,6 +21,10 @@
 #include "bspray/geom.h"
 #include "bspray/scene.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct bsp_accel bsp_accel;
 typedef struct bsp_query bsp_query;
 
@@ -423,5 +427,9 @@ bsp_status bsp_intersect_batch(const bsp_accel *accel, const bsp_ray *rays, cons
 bsp_status bsp_occluded_batch(const bsp_accel *accel, const bsp_ray *rays, const uint32_t *from,
                               size_t n, int threads, unsigned char *occluded,
                               bsp_query_counters *counters, bsp_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* BSPRAY_ACCEL_H */

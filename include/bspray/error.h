@@ -10,6 +10,10 @@
 #ifndef BSPRAY_ERROR_H
 #define BSPRAY_ERROR_H
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef enum bsp_status {
     BSP_OK = 0,
     BSP_ERR_IO,      /* a file could not be opened, read or written */
@@ -29,5 +33,9 @@ typedef struct bsp_error {
 
 /* A short constant name for a status ("ok", "io", "parse", ...). */
 const char *bsp_status_name(bsp_status status);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* BSPRAY_ERROR_H */

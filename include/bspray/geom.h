@@ -13,10 +13,22 @@
 
 #include <stdint.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Anonymous structs are standard C11 but an extension in C++, which g++ and
+ * clang++ accept; __extension__ keeps their -pedantic quiet about it. */
+#if defined(__cplusplus) && defined(__GNUC__)
+#define BSP_ANONYMOUS_STRUCT __extension__ struct
+#else
+#define BSP_ANONYMOUS_STRUCT struct
+#endif
+
 /* A 3-vector. Components are reachable by name (p.x) or by axis (p.v[1]);
  * the union makes axis indexing legal without pointer tricks. */
 typedef union bsp_vec3 {
-    struct {
+    BSP_ANONYMOUS_STRUCT {
         double x, y, z;
     };
     double v[3];
@@ -55,5 +67,9 @@ static inline bsp_vec3 bsp_v3(double x, double y, double z)
     r.z = z;
     return r;
 }
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* BSPRAY_GEOM_H */

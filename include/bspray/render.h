@@ -11,6 +11,10 @@
 #include "bspray/accel.h"
 #include "bspray/error.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* --- Images ---------------------------------------------------------------- */
 
 /* An RGB image, 3 floats per pixel, row 0 at the top. Values are linear and
@@ -160,5 +164,9 @@ bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts, bs
  * (0: 4): the pre-pass of sah-mixed. */
 bsp_status bsp_measure_primary_share(const bsp_scene *scene, const bsp_camera *camera,
                                      int max_depth, double *share, bsp_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* BSPRAY_RENDER_H */

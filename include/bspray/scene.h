@@ -17,6 +17,10 @@
 #include "bspray/error.h"
 #include "bspray/geom.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct bsp_scene bsp_scene;
 
 typedef enum bsp_prim_kind {
@@ -216,5 +220,9 @@ int bsp_scene_intersect_prim(const bsp_scene *scene, size_t prim,
 void bsp_scene_hit_normals(const bsp_scene *scene, const bsp_ray *ray,
                            const bsp_hit *hit, bsp_vec3 *geometric,
                            bsp_vec3 *shading);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* BSPRAY_SCENE_H */

@@ -12,6 +12,10 @@
 
 #include "bspray/error.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Writes the NFF text of scene NAME at size factor SIZE (0: the scene's
  * default) to OUT, with spheres and cones tessellated at level TESSELLATE
  * (0: not tessellated; else 2..64). Loading that text gives exactly the
@@ -27,5 +31,9 @@ const char *bsp_spd_scene_names(void);
 /* Default, smallest and largest size factor of scene NAME; returns 0 when the
  * name is unknown. Any pointer may be NULL. */
 int bsp_spd_scene_sizes(const char *name, int *def, int *min, int *max);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* BSPRAY_SPD_API_H */
