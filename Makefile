@@ -118,6 +118,13 @@ $(BUILD)/tests/names_apart: tests/link/names_apart.c $(PUBLIC_LIB)
 	@mkdir -p $(dir $@)
 	$(CC) -std=c11 $(WARN) $(OPT) $(SAN) -pthread -Iinclude $(CFLAGS) $(LDFLAGS) -o $@ $< $(PUBLIC_LIB) $(LDLIBS)
 
+# Every allocation of the library made to fail in turn (tests/oom/oom_sweep.c):
+# its calls to malloc, calloc, realloc and free reach the program's wrappers.
+OOM_WRAP := -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free
+$(BUILD)/tests/oom_sweep: tests/oom/oom_sweep.c $(LIB)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(LDFLAGS) $(OOM_WRAP) -o $@ $< $(LIB) $(LDLIBS)
+
 $(BUILD)/examples/%-shared: examples/%.c $(BUILD)/libbspray.so $(BUILD)/$(SONAME)
 	@mkdir -p $(dir $@)
 	$(CC) -std=c11 $(WARN) $(OPT) $(SAN) -pthread -Iinclude $(CFLAGS) $(LDFLAGS) -o $@ $< \
@@ -135,7 +142,7 @@ run: $(CLI)
 
 DEFAULT_SCENE ?= spd:balls
 
-test: $(CLI) $(TESTS) $(EXAMPLES) $(EXAMPLES_SHARED) $(BUILD)/tests/names_apart
+test: $(CLI) $(TESTS) $(EXAMPLES) $(EXAMPLES_SHARED) $(BUILD)/tests/names_apart $(BUILD)/tests/oom_sweep
 	BSPRAY_CLI=./$(CLI) ./$(TESTS)
 
 # The sanitizer run checks the same things with fewer random rays and the

@@ -18,16 +18,26 @@
 
 #include <bspray/bspray.h>
 
-namespace {
+namespace
+{
 
 struct scene_deleter {
-    void operator()(bsp_scene *s) const { bsp_scene_destroy(s); }
+    void operator()(bsp_scene *s) const
+    {
+        bsp_scene_destroy(s);
+    }
 };
 struct accel_deleter {
-    void operator()(bsp_accel *a) const { bsp_accel_destroy(a); }
+    void operator()(bsp_accel *a) const
+    {
+        bsp_accel_destroy(a);
+    }
 };
 struct query_deleter {
-    void operator()(bsp_query *q) const { bsp_query_destroy(q); }
+    void operator()(bsp_query *q) const
+    {
+        bsp_query_destroy(q);
+    }
 };
 using scene_ptr = std::unique_ptr<bsp_scene, scene_deleter>;
 using accel_ptr = std::unique_ptr<bsp_accel, accel_deleter>;
@@ -88,9 +98,8 @@ int main(int argc, char **argv)
                 const bsp_vec3 l = bsp_scene_light(scene.get(), 0)->pos;
                 const bsp_ray shadow = {p, bsp_v3(l.x - p.x, l.y - p.y, l.z - p.z), 0.0, 1.0};
                 std::printf("light 0 is %s\n",
-                            bsp_occluded_from(accel.get(), q.get(), &shadow, hit.prim)
-                                ? "blocked"
-                                : "visible");
+                            bsp_occluded_from(accel.get(), q.get(), &shadow, hit.prim) ? "blocked"
+                                                                                       : "visible");
             }
         } else {
             std::printf("centre ray: miss\n");

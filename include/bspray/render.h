@@ -24,8 +24,11 @@ typedef struct bsp_image {
     float *rgb; /* width * height * 3 */
 } bsp_image;
 
+/* The most pixels an image may have. */
+#define BSP_IMAGE_MAX_PIXELS ((long long)1 << 28)
+
 /* A black image; NULL when out of memory or the size is not positive or is
- * absurd (more than 2^28 pixels). Free with bsp_image_destroy. */
+ * absurd (more than BSP_IMAGE_MAX_PIXELS). Free with bsp_image_destroy. */
 bsp_image *bsp_image_create(int width, int height);
 void bsp_image_destroy(bsp_image *img);
 /* PNG through libpng (8-bit RGB). */

@@ -521,7 +521,7 @@ bsp_status bsp_accel_load(const bsp_scene *scene, const char *path, bsp_accel **
         return st;
     }
     bsp_accel *a = calloc(1, sizeof *a);
-    kd_tree *t = malloc(sizeof *t);
+    kd_tree *t = calloc(1, sizeof *t); /* zeroed: kd_tree_free is safe before kd_tree_init */
     if (!a || !t || !kd_tree_init(t, scene, (int)fh.max_depth, (int)fh.max_leaf)) {
         if (t)
             kd_tree_free(t);

@@ -16,8 +16,7 @@
 
 #include "bspray/render.h"
 
-/* The most pixels an image may have (see render.h). */
-#define IMAGE_MAX_PIXELS ((long long)1 << 28)
+#define IMAGE_MAX_PIXELS BSP_IMAGE_MAX_PIXELS
 
 static bsp_status image_fail(bsp_error *err, bsp_status status, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));

@@ -393,10 +393,16 @@ bsp_status bsp_render(const bsp_accel *accel, const bsp_render_options *opts_in,
     job.accel = accel;
     job.scene = s;
     job.opts = &opts;
+    if (width < 1 || height < 1)
+        return error_set(err, BSP_ERR_INVALID, NULL, 0, "image size %d x %d", width, height);
+    if ((long long)width > BSP_IMAGE_MAX_PIXELS / height)
+        return error_set(err, BSP_ERR_LIMIT, NULL, 0,
+                         "a %d x %d image has more than %lld pixels", width, height,
+                         BSP_IMAGE_MAX_PIXELS);
     job.img = bsp_image_create(width, height);
     if (!job.img)
-        return error_set(err, BSP_ERR_LIMIT, NULL, 0,
-                         "cannot allocate a %d x %d image", width, height);
+        return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory for a %d x %d image",
+                         width, height);
     camera_rays_init(&job.cam, cam, width, height, opts.sampling, ortho_width);
     job.eps = RAY_EPS_REL * scene_scale(s);
     size_t nl = bsp_scene_light_count(s);

@@ -1,0 +1,520 @@
+/*
+ * oom_sweep.c — every allocation of the library made to fail, one at a time.
+ *
+ * Linked with -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free
+ * (Makefile), so the library's calls to those reach the wrappers below: they
+ * count every allocation and every block still live, and can make the K-th
+ * allocation return NULL ("once"), or the K-th and every later one ("from").
+ * For each scenario — loading each reader's files, building each structure,
+ * a query, a batch on two threads, a render, a tree file read back — a run
+ * without failures counts its allocations N and gives the reference answer;
+ * then for every K < N, in both modes, the same call must either succeed
+ * with the reference answer (the rays' primitives and t bit for bit, the
+ * image float for float) or fail with BSP_ERR_NOMEM and a message, and leave
+ * no block allocated once its objects are destroyed. No crash, no other
+ * status, no leak, no silently wrong answer.
+ *
+ *   oom_sweep [DATA_DIR]   (default tests/data)
+ *
+ * Prints one line per scenario and exits 0 when every run held, 1 otherwise
+ * (each failing run named on stderr). tests/test_examples.c runs it.
+ */
+#include <math.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include "bspray/bspray.h"
+
+/* --- the wrapped allocator ------------------------------------------------ */
+
+void *__real_malloc(size_t n);
+void *__real_calloc(size_t n, size_t size);
+void *__real_realloc(void *p, size_t n);
+void __real_free(void *p);
+void *__wrap_malloc(size_t n);
+void *__wrap_calloc(size_t n, size_t size);
+void *__wrap_realloc(void *p, size_t n);
+void __wrap_free(void *p);
+
+enum { FAIL_NEVER, FAIL_ONCE, FAIL_FROM };
+
+static atomic_long calls; /* allocations asked for since the last arm() */
+static atomic_long live;  /* blocks allocated and not freed */
+static long fail_at = -1; /* the allocation (0-based since arm) that fails */
+static int fail_mode = FAIL_NEVER;
+
+static int should_fail(void)
+{
+    long k = atomic_fetch_add(&calls, 1);
+    return (fail_mode == FAIL_ONCE && k == fail_at) || (fail_mode == FAIL_FROM && k >= fail_at);
+}
+
+void *__wrap_malloc(size_t n)
+{
+    if (should_fail())
+        return NULL;
+    void *p = __real_malloc(n);
+    if (p)
+        atomic_fetch_add(&live, 1);
+    return p;
+}
+
+void *__wrap_calloc(size_t n, size_t size)
+{
+    if (should_fail())
+        return NULL;
+    void *p = __real_calloc(n, size);
+    if (p)
+        atomic_fetch_add(&live, 1);
+    return p;
+}
+
+void *__wrap_realloc(void *p, size_t n)
+{
+    if (n == 0 || should_fail()) /* realloc(p, 0) is not asked of the library */
+        return n == 0 ? (__wrap_free(p), NULL) : NULL;
+    void *q = __real_realloc(p, n);
+    if (q && !p)
+        atomic_fetch_add(&live, 1);
+    return q;
+}
+
+void __wrap_free(void *p)
+{
+    if (p)
+        atomic_fetch_sub(&live, 1);
+    __real_free(p);
+}
+
+/* Counts allocations from now, failing the K-th in MODE. */
+static void arm(int mode, long k)
+{
+    fail_mode = FAIL_NEVER;
+    atomic_store(&calls, 0);
+    fail_at = k;
+    fail_mode = mode;
+}
+
+static long disarm(void)
+{
+    fail_mode = FAIL_NEVER;
+    return atomic_load(&calls);
+}
+
+/* --- rays and their reference answers ------------------------------------- */
+
+#define NRAYS 300
+
+static uint64_t rng_state;
+static double uniform(void)
+{
+    rng_state = rng_state * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(rng_state >> 11) / 9007199254740992.0;
+}
+
+/* Rays from inside and around BOX in random directions, some along an axis. */
+static void make_rays(bsp_box box, bsp_ray *rays)
+{
+    rng_state = 12345;
+    for (int i = 0; i < NRAYS; i++) {
+        bsp_vec3 o, d;
+        for (int k = 0; k < 3; k++) {
+            double lo = box.lo.v[k], hi = box.hi.v[k], w = hi - lo;
+            o.v[k] = lo - 0.2 * w + 1.4 * w * uniform();
+            d.v[k] = uniform() - 0.5;
+        }
+        if (i % 7 == 0)
+            d = bsp_v3(i % 2 ? 1.0 : -1.0, 0.0, 0.0);
+        rays[i] = (bsp_ray){o, d, 0.0, INFINITY};
+    }
+}
+
+/* ACCEL's answers to RAYS, with failures off; 0 when out of memory. */
+static int answer(const bsp_accel *accel, const bsp_ray *rays, bsp_hit *hits)
+{
+    bsp_query *q = bsp_query_create(accel);
+    if (!q)
+        return 0;
+    for (int i = 0; i < NRAYS; i++)
+        if (!bsp_intersect(accel, q, &rays[i], &hits[i]))
+            hits[i].prim = BSP_NO_PRIM;
+    bsp_query_destroy(q);
+    return 1;
+}
+
+static int same_hits(const bsp_hit *a, const bsp_hit *b, char *why, size_t n)
+{
+    for (int i = 0; i < NRAYS; i++)
+        if (a[i].prim != b[i].prim ||
+            (a[i].prim != BSP_NO_PRIM && memcmp(&a[i].t, &b[i].t, sizeof a[i].t) != 0)) {
+            snprintf(why, n, "ray %d: primitive %u at %.17g, naive %u at %.17g", i, a[i].prim,
+                     a[i].t, b[i].prim, b[i].t);
+            return 0;
+        }
+    return 1;
+}
+
+/* --- scenarios -------------------------------------------------------------- */
+
+/* A scenario's run: RUN_OK (the reference answer), RUN_NOMEM (refused with
+ * BSP_ERR_NOMEM and a message) or RUN_WRONG (WHY says how). */
+enum { RUN_OK, RUN_NOMEM, RUN_WRONG };
+
+typedef struct scenario scenario;
+struct scenario {
+    char name[160];
+    int (*run)(const scenario *sc, char *why, size_t n);
+    /* inputs and references, made without failures */
+    const char *path;              /* load */
+    size_t ref_prims;              /* load */
+    bsp_box ref_bounds;            /* load */
+    const bsp_scene *scene;        /* build */
+    bsp_accel_kind kind;           /* build */
+    bsp_octree_split octree_split; /* build */
+    int grid_levels;               /* build */
+    const bsp_accel *accel;        /* query, batch, render, tree file */
+    const char *tree_path;         /* tree file */
+    const bsp_ray *rays;
+    const bsp_hit *ref_hits;
+    const bsp_image *ref_image; /* render */
+};
+
+static int refused(bsp_status st, const bsp_error *err, char *why, size_t n)
+{
+    if (st == BSP_ERR_NOMEM && err->message[0])
+        return RUN_NOMEM;
+    snprintf(why, n, "status %s, message '%s'", bsp_status_name(st), err->message);
+    return RUN_WRONG;
+}
+
+static int run_load(const scenario *sc, char *why, size_t n)
+{
+    bsp_scene *s = NULL;
+    bsp_error err = {0};
+    bsp_status st = bsp_scene_load(sc->path, &s, &err);
+    disarm();
+    if (st != BSP_OK)
+        return refused(st, &err, why, n);
+    bsp_box b = bsp_scene_bounds(s);
+    int same =
+        bsp_scene_prim_count(s) == sc->ref_prims && memcmp(&b, &sc->ref_bounds, sizeof b) == 0;
+    if (!same)
+        snprintf(why, n, "%zu primitives, %zu without failures", bsp_scene_prim_count(s),
+                 sc->ref_prims);
+    bsp_scene_destroy(s);
+    return same ? RUN_OK : RUN_WRONG;
+}
+
+/* Whether A (made under failures) answers SC's rays as the reference does;
+ * its queries run without failures. */
+static int answers_hold(const bsp_accel *a, const scenario *sc, char *why, size_t n)
+{
+    bsp_hit hits[NRAYS];
+    if (!answer(a, sc->rays, hits)) {
+        snprintf(why, n, "out of memory without failures");
+        return RUN_WRONG;
+    }
+    return same_hits(hits, sc->ref_hits, why, n) ? RUN_OK : RUN_WRONG;
+}
+
+static void build_options(const scenario *sc, bsp_build_options *o)
+{
+    bsp_build_options_defaults(o);
+    o->kind = sc->kind;
+    o->threads = 1; /* the same allocations in the same order every run */
+    o->octree_split = sc->octree_split;
+    o->grid_levels = sc->grid_levels;
+}
+
+static int run_build(const scenario *sc, char *why, size_t n)
+{
+    bsp_build_options o;
+    build_options(sc, &o);
+    bsp_accel *a = NULL;
+    bsp_error err = {0};
+    bsp_status st = bsp_accel_build(sc->scene, &o, &a, &err);
+    disarm();
+    if (st != BSP_OK)
+        return refused(st, &err, why, n);
+    int r = RUN_OK;
+    if (bsp_accel_check(a, &err) != BSP_OK) {
+        snprintf(why, n, "the built structure fails its check: %s", err.message);
+        r = RUN_WRONG;
+    } else {
+        r = answers_hold(a, sc, why, n);
+    }
+    bsp_accel_destroy(a);
+    return r;
+}
+
+static int run_query(const scenario *sc, char *why, size_t n)
+{
+    bsp_query *q = bsp_query_create(sc->accel);
+    if (!q) {
+        disarm();
+        return RUN_NOMEM; /* the documented refusal: NULL */
+    }
+    bsp_hit hits[NRAYS];
+    for (int i = 0; i < NRAYS; i++)
+        if (!bsp_intersect(sc->accel, q, &sc->rays[i], &hits[i]))
+            hits[i].prim = BSP_NO_PRIM;
+    disarm();
+    bsp_query_destroy(q);
+    return same_hits(hits, sc->ref_hits, why, n) ? RUN_OK : RUN_WRONG;
+}
+
+static int run_batch(const scenario *sc, char *why, size_t n)
+{
+    bsp_hit hits[NRAYS];
+    bsp_query_counters c;
+    bsp_error err = {0};
+    bsp_status st = bsp_intersect_batch(sc->accel, sc->rays, NULL, NRAYS, 2, hits, &c, &err);
+    disarm();
+    if (st != BSP_OK)
+        return refused(st, &err, why, n);
+    return same_hits(hits, sc->ref_hits, why, n) ? RUN_OK : RUN_WRONG;
+}
+
+static void render_options(bsp_render_options *o)
+{
+    bsp_render_options_defaults(o);
+    o->width = o->height = 24;
+    o->threads = 1;
+}
+
+static int run_render(const scenario *sc, char *why, size_t n)
+{
+    bsp_render_options o;
+    render_options(&o);
+    bsp_image *img = NULL;
+    bsp_error err = {0};
+    bsp_status st = bsp_render(sc->accel, &o, &img, NULL, &err);
+    disarm();
+    if (st != BSP_OK)
+        return refused(st, &err, why, n);
+    const bsp_image *ref = sc->ref_image;
+    int same =
+        img->width == ref->width && img->height == ref->height &&
+        memcmp(img->rgb, ref->rgb, sizeof(float) * 3 * (size_t)ref->width * ref->height) == 0;
+    if (!same)
+        snprintf(why, n, "the image differs from the one rendered without failures");
+    bsp_image_destroy(img);
+    return same ? RUN_OK : RUN_WRONG;
+}
+
+static int run_tree_file(const scenario *sc, char *why, size_t n)
+{
+    bsp_accel *a = NULL;
+    bsp_error err = {0};
+    bsp_status st = bsp_accel_load(bsp_accel_scene(sc->accel), sc->tree_path, &a, &err);
+    disarm();
+    if (st != BSP_OK)
+        return refused(st, &err, why, n);
+    int r = answers_hold(a, sc, why, n);
+    bsp_accel_destroy(a);
+    return r;
+}
+
+/* --- the sweep -------------------------------------------------------------- */
+
+static int failures;
+
+/* Runs SC once without failures (its allocation count N), then with each
+ * of its N allocations failing, in both modes. */
+static void sweep(const scenario *sc)
+{
+    char why[512] = "";
+    long base = atomic_load(&live);
+    arm(FAIL_NEVER, -1);
+    int r = sc->run(sc, why, sizeof why);
+    long total = disarm();
+    if (r != RUN_OK) {
+        fprintf(stderr, "oom_sweep: %s: without failures: %s\n", sc->name, why);
+        failures++;
+        return;
+    }
+    long runs = 0, refusals = 0, bad = 0;
+    for (int mode = FAIL_ONCE; mode <= FAIL_FROM; mode++)
+        for (long k = 0; k < total; k++) {
+            why[0] = '\0';
+            arm(mode, k);
+            r = sc->run(sc, why, sizeof why);
+            disarm();
+            runs++;
+            refusals += r == RUN_NOMEM;
+            long leaked = atomic_load(&live) - base;
+            if (r == RUN_WRONG || leaked != 0) {
+                if (bad < 5)
+                    fprintf(stderr,
+                            "oom_sweep: %s: allocation %ld of %ld failing (%s): %s%s%ld block(s) "
+                            "left\n",
+                            sc->name, k + 1, total,
+                            mode == FAIL_ONCE ? "once" : "and every later one",
+                            r == RUN_WRONG ? why : "", r == RUN_WRONG ? "; " : "", leaked);
+                bad++;
+                atomic_store(&live, base); /* report each run's own leaks */
+            }
+        }
+    printf("%-40s %6ld allocations, %6ld runs, %6ld refused, %s\n", sc->name, total, runs, refusals,
+           bad ? "FAILED" : "ok");
+    failures += bad > 0;
+}
+
+static bsp_scene *load_or_die(const char *path)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    if (bsp_scene_load(path, &s, &err) != BSP_OK) {
+        fprintf(stderr, "oom_sweep: %s\n", err.message);
+        exit(2);
+    }
+    return s;
+}
+
+static bsp_accel *build_or_die(const bsp_scene *s, bsp_accel_kind kind)
+{
+    const scenario sc = {.kind = kind};
+    bsp_build_options o;
+    build_options(&sc, &o);
+    bsp_accel *a = NULL;
+    bsp_error err;
+    if (bsp_accel_build(s, &o, &a, &err) != BSP_OK) {
+        fprintf(stderr, "oom_sweep: %s\n", err.message);
+        exit(2);
+    }
+    return a;
+}
+
+/* A gzip copy of SRC at DST (the reader's gunzip path); 0 on failure. */
+static int gzip_copy(const char *src, const char *dst)
+{
+    FILE *in = fopen(src, "rb");
+    gzFile out = gzopen(dst, "wb");
+    int ok = in && out;
+    char buf[4096];
+    size_t got;
+    while (ok && (got = fread(buf, 1, sizeof buf, in)) > 0)
+        ok = gzwrite(out, buf, (unsigned)got) == (int)got;
+    if (in)
+        fclose(in);
+    if (out)
+        ok = gzclose(out) == Z_OK && ok;
+    return ok;
+}
+
+static const char *const scene_names[] = {"spd:balls:1", "spd:tree:3", "spd:teapot:2",
+                                          "spd:gears:1"};
+#define NSCENES (sizeof scene_names / sizeof scene_names[0])
+
+int main(int argc, char **argv)
+{
+    const char *data = argc > 1 ? argv[1] : "tests/data";
+    char gz[256], tree[256];
+    snprintf(gz, sizeof gz, "/tmp/bspray-oom-%ld.nff.gz", (long)getpid());
+    snprintf(tree, sizeof tree, "/tmp/bspray-oom-%ld.kdt", (long)getpid());
+    char nff[512], obj[512], ply[512];
+    snprintf(nff, sizeof nff, "%s/nff_good/cones.nff", data);
+    snprintf(obj, sizeof obj, "%s/obj/polygons.obj", data);
+    snprintf(ply, sizeof ply, "%s/ply/extras.ply", data);
+    if (!gzip_copy(nff, gz)) {
+        fprintf(stderr, "oom_sweep: cannot make %s from %s\n", gz, nff);
+        return 2;
+    }
+
+    /* loading: each reader, a gzip file and a generated scene */
+    const char *loads[] = {nff, obj, ply, gz, "spd:teapot:2"};
+    for (size_t i = 0; i < sizeof loads / sizeof loads[0]; i++) {
+        scenario sc = {.run = run_load, .path = loads[i]};
+        snprintf(sc.name, sizeof sc.name, "load %s",
+                 strrchr(loads[i], '/') ? strrchr(loads[i], '/') + 1 : loads[i]);
+        bsp_scene *s = load_or_die(loads[i]);
+        sc.ref_prims = bsp_scene_prim_count(s);
+        sc.ref_bounds = bsp_scene_bounds(s);
+        bsp_scene_destroy(s);
+        sweep(&sc);
+    }
+
+    static const struct {
+        const char *name;
+        bsp_accel_kind kind;
+        bsp_octree_split split;
+        int levels;
+    } methods[] = {
+        {"kaplan", BSP_ACCEL_KAPLAN, BSP_OCTREE_CENTRE, 0},
+        {"sah", BSP_ACCEL_SAH, BSP_OCTREE_CENTRE, 0},
+        {"sah-per", BSP_ACCEL_SAH_PER, BSP_OCTREE_CENTRE, 0},
+        {"sah-par", BSP_ACCEL_SAH_PAR, BSP_OCTREE_CENTRE, 0},
+        {"sah-mixed", BSP_ACCEL_SAH_MIXED, BSP_OCTREE_CENTRE, 0},
+        {"grid", BSP_ACCEL_GRID, BSP_OCTREE_CENTRE, 0},
+        {"grid-rec", BSP_ACCEL_GRID, BSP_OCTREE_CENTRE, 2},
+        {"octree", BSP_ACCEL_OCTREE, BSP_OCTREE_CENTRE, 0},
+        {"octree-cost", BSP_ACCEL_OCTREE, BSP_OCTREE_COST, 0},
+    };
+    static bsp_ray rays[NRAYS];
+    static bsp_hit ref[NRAYS];
+    for (size_t si = 0; si < NSCENES; si++) {
+        bsp_scene *s = load_or_die(scene_names[si]);
+        make_rays(bsp_scene_bounds(s), rays);
+        bsp_accel *naive = build_or_die(s, BSP_ACCEL_NAIVE);
+        if (!answer(naive, rays, ref))
+            return 2;
+        bsp_accel_destroy(naive);
+
+        for (size_t m = 0; m < sizeof methods / sizeof methods[0]; m++) {
+            /* sah-mixed renders two small images per build: on the first scene only */
+            if (methods[m].kind == BSP_ACCEL_SAH_MIXED && si > 0)
+                continue;
+            scenario sc = {.run = run_build,
+                           .scene = s,
+                           .kind = methods[m].kind,
+                           .octree_split = methods[m].split,
+                           .grid_levels = methods[m].levels,
+                           .rays = rays,
+                           .ref_hits = ref};
+            snprintf(sc.name, sizeof sc.name, "build %s %s", methods[m].name, scene_names[si]);
+            sweep(&sc);
+        }
+
+        /* the default tree: queries, a batch, a render, the tree read back */
+        bsp_accel *a = build_or_die(s, BSP_ACCEL_SAH);
+        bsp_error err;
+        if (bsp_accel_save(a, tree, &err) != BSP_OK) {
+            fprintf(stderr, "oom_sweep: %s\n", err.message);
+            return 2;
+        }
+        bsp_render_options ro;
+        render_options(&ro);
+        bsp_image *img = NULL;
+        if (bsp_render(a, &ro, &img, NULL, &err) != BSP_OK) {
+            fprintf(stderr, "oom_sweep: %s\n", err.message);
+            return 2;
+        }
+        scenario base = {
+            .accel = a, .rays = rays, .ref_hits = ref, .tree_path = tree, .ref_image = img};
+        static const struct {
+            const char *name;
+            int (*run)(const scenario *, char *, size_t);
+        } uses[] = {{"query", run_query},
+                    {"batch on 2 threads", run_batch},
+                    {"render 24 x 24", run_render},
+                    {"tree file", run_tree_file}};
+        for (size_t u = 0; u < sizeof uses / sizeof uses[0]; u++) {
+            scenario sc = base;
+            sc.run = uses[u].run;
+            snprintf(sc.name, sizeof sc.name, "%s %s", uses[u].name, scene_names[si]);
+            sweep(&sc);
+        }
+        bsp_image_destroy(img);
+        bsp_accel_destroy(a);
+        bsp_scene_destroy(s);
+    }
+    remove(gz);
+    remove(tree);
+    printf("%s\n", failures ? "oom_sweep: FAILED" : "oom_sweep: every run held");
+    return failures ? 1 : 0;
+}
