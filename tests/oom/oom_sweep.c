@@ -43,15 +43,22 @@ void __wrap_free(void *p);
 
 enum { FAIL_NEVER, FAIL_ONCE, FAIL_FROM };
 
-static atomic_long calls; /* allocations asked for since the last arm() */
-static atomic_long live;  /* blocks allocated and not freed */
-static long fail_at = -1; /* the allocation (0-based since arm) that fails */
-static int fail_mode = FAIL_NEVER;
+/* Written by the main thread between the calls it tests; atomic because the
+ * library's worker threads allocate too. */
+static atomic_int counting;     /* 1 between arm() and disarm() */
+static atomic_long calls;       /* allocations asked for while counting */
+static atomic_long live;        /* blocks allocated and not freed */
+static atomic_long fail_at;     /* the allocation (0-based since arm) that fails */
+static atomic_int fail_mode;    /* FAIL_NEVER, FAIL_ONCE or FAIL_FROM */
 
 static int should_fail(void)
 {
+    if (!atomic_load(&counting))
+        return 0;
     long k = atomic_fetch_add(&calls, 1);
-    return (fail_mode == FAIL_ONCE && k == fail_at) || (fail_mode == FAIL_FROM && k >= fail_at);
+    int mode = atomic_load(&fail_mode);
+    long at = atomic_load(&fail_at);
+    return (mode == FAIL_ONCE && k == at) || (mode == FAIL_FROM && k >= at);
 }
 
 void *__wrap_malloc(size_t n)
@@ -94,15 +101,18 @@ void __wrap_free(void *p)
 /* Counts allocations from now, failing the K-th in MODE. */
 static void arm(int mode, long k)
 {
-    fail_mode = FAIL_NEVER;
+    atomic_store(&counting, 0);
     atomic_store(&calls, 0);
-    fail_at = k;
-    fail_mode = mode;
+    atomic_store(&fail_at, k);
+    atomic_store(&fail_mode, mode);
+    atomic_store(&counting, 1);
 }
 
+/* Ends the counting (a scenario's checks after its call allocate freely);
+ * the allocations counted since arm(). */
 static long disarm(void)
 {
-    fail_mode = FAIL_NEVER;
+    atomic_store(&counting, 0);
     return atomic_load(&calls);
 }
 
@@ -177,11 +187,15 @@ struct scenario {
     bsp_accel_kind kind;           /* build */
     bsp_octree_split octree_split; /* build */
     int grid_levels;               /* build */
+    int budget;                    /* build: 1, a leaf budget tight enough to prune */
+    int threads;                   /* build: 0 for 1 */
     const bsp_accel *accel;        /* query, batch, render, tree file */
     const char *tree_path;         /* tree file */
     const bsp_ray *rays;
     const bsp_hit *ref_hits;
-    const bsp_image *ref_image; /* render */
+    const bsp_image *ref_image;    /* render; png: the image to write */
+    const char *png_path;          /* png */
+    const bsp_image *ref_png;      /* png: the image written, read back */
 };
 
 static int refused(bsp_status st, const bsp_error *err, char *why, size_t n)
@@ -226,9 +240,14 @@ static void build_options(const scenario *sc, bsp_build_options *o)
 {
     bsp_build_options_defaults(o);
     o->kind = sc->kind;
-    o->threads = 1; /* the same allocations in the same order every run */
+    /* one thread: the same allocations in the same order every run */
+    o->threads = sc->threads > 0 ? sc->threads : 1;
     o->octree_split = sc->octree_split;
     o->grid_levels = sc->grid_levels;
+    if (sc->budget) { /* half a leaf per primitive: the estimate, the pruning */
+        o->sah_leaf_budget = 0.5;
+        o->sah_leaf_budget_min = 1;
+    }
 }
 
 static int run_build(const scenario *sc, char *why, size_t n)
@@ -287,6 +306,12 @@ static void render_options(bsp_render_options *o)
     o->threads = 1;
 }
 
+static int same_image(const bsp_image *a, const bsp_image *b)
+{
+    return a->width == b->width && a->height == b->height &&
+           memcmp(a->rgb, b->rgb, sizeof(float) * 3 * (size_t)a->width * (size_t)a->height) == 0;
+}
+
 static int run_render(const scenario *sc, char *why, size_t n)
 {
     bsp_render_options o;
@@ -297,12 +322,45 @@ static int run_render(const scenario *sc, char *why, size_t n)
     disarm();
     if (st != BSP_OK)
         return refused(st, &err, why, n);
-    const bsp_image *ref = sc->ref_image;
-    int same =
-        img->width == ref->width && img->height == ref->height &&
-        memcmp(img->rgb, ref->rgb, sizeof(float) * 3 * (size_t)ref->width * ref->height) == 0;
+    int same = same_image(img, sc->ref_image);
     if (!same)
         snprintf(why, n, "the image differs from the one rendered without failures");
+    bsp_image_destroy(img);
+    return same ? RUN_OK : RUN_WRONG;
+}
+
+/* The image written as PNG under failures, then read back without. */
+static int run_png_write(const scenario *sc, char *why, size_t n)
+{
+    bsp_error err = {0};
+    bsp_status st = bsp_image_write_png(sc->ref_image, sc->png_path, &err);
+    disarm();
+    if (st != BSP_OK)
+        return refused(st, &err, why, n);
+    bsp_image *back = NULL;
+    if (bsp_image_read_png(sc->png_path, &back, &err) != BSP_OK) {
+        snprintf(why, n, "the PNG written cannot be read: %s", err.message);
+        return RUN_WRONG;
+    }
+    int same = same_image(back, sc->ref_png);
+    if (!same)
+        snprintf(why, n, "the PNG written differs from the one written without failures");
+    bsp_image_destroy(back);
+    return same ? RUN_OK : RUN_WRONG;
+}
+
+/* The PNG read under failures. */
+static int run_png_read(const scenario *sc, char *why, size_t n)
+{
+    bsp_image *img = NULL;
+    bsp_error err = {0};
+    bsp_status st = bsp_image_read_png(sc->png_path, &img, &err);
+    disarm();
+    if (st != BSP_OK)
+        return refused(st, &err, why, n);
+    int same = same_image(img, sc->ref_png);
+    if (!same)
+        snprintf(why, n, "the PNG read differs from the one read without failures");
     bsp_image_destroy(img);
     return same ? RUN_OK : RUN_WRONG;
 }
@@ -414,9 +472,10 @@ static const char *const scene_names[] = {"spd:balls:1", "spd:tree:3", "spd:teap
 int main(int argc, char **argv)
 {
     const char *data = argc > 1 ? argv[1] : "tests/data";
-    char gz[256], tree[256];
+    char gz[256], tree[256], png[256];
     snprintf(gz, sizeof gz, "/tmp/bspray-oom-%ld.nff.gz", (long)getpid());
     snprintf(tree, sizeof tree, "/tmp/bspray-oom-%ld.kdt", (long)getpid());
+    snprintf(png, sizeof png, "/tmp/bspray-oom-%ld.png", (long)getpid());
     char nff[512], obj[512], ply[512];
     snprintf(nff, sizeof nff, "%s/nff_good/cones.nff", data);
     snprintf(obj, sizeof obj, "%s/obj/polygons.obj", data);
@@ -443,17 +502,19 @@ int main(int argc, char **argv)
         const char *name;
         bsp_accel_kind kind;
         bsp_octree_split split;
-        int levels;
+        int levels, budget, threads;
     } methods[] = {
-        {"kaplan", BSP_ACCEL_KAPLAN, BSP_OCTREE_CENTRE, 0},
-        {"sah", BSP_ACCEL_SAH, BSP_OCTREE_CENTRE, 0},
-        {"sah-per", BSP_ACCEL_SAH_PER, BSP_OCTREE_CENTRE, 0},
-        {"sah-par", BSP_ACCEL_SAH_PAR, BSP_OCTREE_CENTRE, 0},
-        {"sah-mixed", BSP_ACCEL_SAH_MIXED, BSP_OCTREE_CENTRE, 0},
-        {"grid", BSP_ACCEL_GRID, BSP_OCTREE_CENTRE, 0},
-        {"grid-rec", BSP_ACCEL_GRID, BSP_OCTREE_CENTRE, 2},
-        {"octree", BSP_ACCEL_OCTREE, BSP_OCTREE_CENTRE, 0},
-        {"octree-cost", BSP_ACCEL_OCTREE, BSP_OCTREE_COST, 0},
+        {"kaplan", BSP_ACCEL_KAPLAN, BSP_OCTREE_CENTRE, 0, 0, 0},
+        {"sah", BSP_ACCEL_SAH, BSP_OCTREE_CENTRE, 0, 0, 0},
+        {"sah+budget", BSP_ACCEL_SAH, BSP_OCTREE_CENTRE, 0, 1, 0},
+        {"sah+2threads", BSP_ACCEL_SAH, BSP_OCTREE_CENTRE, 0, 0, 2},
+        {"sah-per", BSP_ACCEL_SAH_PER, BSP_OCTREE_CENTRE, 0, 0, 0},
+        {"sah-par", BSP_ACCEL_SAH_PAR, BSP_OCTREE_CENTRE, 0, 0, 0},
+        {"sah-mixed", BSP_ACCEL_SAH_MIXED, BSP_OCTREE_CENTRE, 0, 0, 0},
+        {"grid", BSP_ACCEL_GRID, BSP_OCTREE_CENTRE, 0, 0, 0},
+        {"grid-rec", BSP_ACCEL_GRID, BSP_OCTREE_CENTRE, 2, 0, 0},
+        {"octree", BSP_ACCEL_OCTREE, BSP_OCTREE_CENTRE, 0, 0, 0},
+        {"octree-cost", BSP_ACCEL_OCTREE, BSP_OCTREE_COST, 0, 0, 0},
     };
     static bsp_ray rays[NRAYS];
     static bsp_hit ref[NRAYS];
@@ -474,6 +535,8 @@ int main(int argc, char **argv)
                            .kind = methods[m].kind,
                            .octree_split = methods[m].split,
                            .grid_levels = methods[m].levels,
+                           .budget = methods[m].budget,
+                           .threads = methods[m].threads,
                            .rays = rays,
                            .ref_hits = ref};
             snprintf(sc.name, sizeof sc.name, "build %s %s", methods[m].name, scene_names[si]);
@@ -494,27 +557,43 @@ int main(int argc, char **argv)
             fprintf(stderr, "oom_sweep: %s\n", err.message);
             return 2;
         }
-        scenario base = {
-            .accel = a, .rays = rays, .ref_hits = ref, .tree_path = tree, .ref_image = img};
+        /* the render as PNG, read back: the PNG scenarios' reference */
+        bsp_image *png_img = NULL;
+        if (bsp_image_write_png(img, png, &err) != BSP_OK ||
+            bsp_image_read_png(png, &png_img, &err) != BSP_OK) {
+            fprintf(stderr, "oom_sweep: %s\n", err.message);
+            return 2;
+        }
+        scenario base = {.accel = a,
+                         .rays = rays,
+                         .ref_hits = ref,
+                         .tree_path = tree,
+                         .ref_image = img,
+                         .png_path = png,
+                         .ref_png = png_img};
         static const struct {
             const char *name;
             int (*run)(const scenario *, char *, size_t);
         } uses[] = {{"query", run_query},
                     {"batch on 2 threads", run_batch},
                     {"render 24 x 24", run_render},
-                    {"tree file", run_tree_file}};
+                    {"tree file", run_tree_file},
+                    {"png write", run_png_write},
+                    {"png read", run_png_read}};
         for (size_t u = 0; u < sizeof uses / sizeof uses[0]; u++) {
             scenario sc = base;
             sc.run = uses[u].run;
             snprintf(sc.name, sizeof sc.name, "%s %s", uses[u].name, scene_names[si]);
             sweep(&sc);
         }
+        bsp_image_destroy(png_img);
         bsp_image_destroy(img);
         bsp_accel_destroy(a);
         bsp_scene_destroy(s);
     }
     remove(gz);
     remove(tree);
+    remove(png);
     printf("%s\n", failures ? "oom_sweep: FAILED" : "oom_sweep: every run held");
     return failures ? 1 : 0;
 }
