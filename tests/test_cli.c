@@ -7,6 +7,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "bspray/bspray.h"
 #include "harness.h"
@@ -975,4 +977,85 @@ TEST(cli_render_pixel_orders_write_the_same_image)
     snprintf(cmd, sizeof cmd, "%s render spd:balls:1 --pixel-order diagonal -o %s 2>&1",
              harness_cli(), a);
     CHECK_RUN(cmd, 2, "option '--pixel-order' takes tiles or rows, got 'diagonal'");
+}
+
+/* Output that cannot be written (a full device) fails the command with a
+ * message: standard output, a CSV, a JSON file, a tree file, a scene. And
+ * what is not a regular file is written where it is and never replaced or
+ * removed: a tree saved through a symbolic link leaves the link, and a
+ * failed `gen` through a link to the full device leaves that link. */
+TEST(cli_write_failures_exit_1_and_keep_what_is_not_a_file)
+{
+    struct stat full;
+    if (stat("/dev/full", &full) != 0 || !S_ISCHR(full.st_mode))
+        harness_skip("no /dev/full on this system");
+    char link[512], target[512], gen_link[512], cmd[2048];
+    harness_tmp_path(link, sizeof link, "saved-through.kdt");
+    harness_tmp_path(target, sizeof target, "saved-target.kdt");
+    harness_tmp_path(gen_link, sizeof gen_link, "full-link.nff");
+    static const struct {
+        const char *args, *message;
+    } cases[] = {
+        {"stats spd:balls:1 > /dev/full", "standard output: write failed"},
+        {"render spd:balls:1 --res 8 -o /dev/null > /dev/full", "standard output: write failed"},
+        {"gen balls -s 1 > /dev/full", "failed"}, /* by the writer or at the end */
+        {"bench spd:balls:1 --accel sah --res 9 --validate 50 --quiet --csv /dev/full > /dev/null",
+         "/dev/full: write failed"},
+        {"trace spd:balls:1 --rays /dev/null --stats-json /dev/full", "/dev/full: write failed"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        /* stderr to the pipe first, then the case's own redirections */
+        snprintf(cmd, sizeof cmd, "%s 2>&1 %s", harness_cli(), cases[i].args);
+        int st;
+        char *out = harness_run(cmd, &st);
+        REQUIRE(out);
+        CHECK_MSG(st == 1, "'%s' exited with %d: %s", cases[i].args, st, out);
+        CHECK_STR_CONTAINS(out, cases[i].message);
+        free(out);
+    }
+    /* the device itself is never what a tree or a scene is written to here:
+     * a regression would replace or remove it; through a link only the link
+     * is at stake */
+    remove(gen_link);
+    REQUIRE(symlink("/dev/full", gen_link) == 0);
+    int st;
+    char *out;
+    snprintf(cmd, sizeof cmd, "%s build spd:balls:1 -o %s 2>&1 >/dev/null", harness_cli(),
+             gen_link);
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 1);
+    CHECK_STR_CONTAINS(out, "cannot write: No space left on device");
+    free(out);
+    struct stat ls, ts;
+    CHECK_MSG(lstat(gen_link, &ls) == 0 && S_ISLNK(ls.st_mode),
+              "a failed save replaced the link %s", gen_link);
+
+    remove(link);
+    remove(target);
+    REQUIRE(symlink(target, link) == 0);
+    snprintf(cmd, sizeof cmd, "%s build spd:balls:1 -o %s > /dev/null 2>&1", harness_cli(), link);
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 0);
+    free(out);
+    CHECK_MSG(lstat(link, &ls) == 0 && S_ISLNK(ls.st_mode), "%s is no longer a link", link);
+    CHECK_MSG(stat(target, &ts) == 0 && S_ISREG(ts.st_mode) && ts.st_size > 100,
+              "the tree did not reach %s", target);
+    snprintf(cmd, sizeof cmd, "%s stats spd:balls:1 --tree %s 2>&1", harness_cli(), link);
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_MSG(st == 0, "the tree saved through a link cannot be loaded: %s", out);
+    free(out);
+
+    snprintf(cmd, sizeof cmd, "%s gen balls -s 1 -o %s 2>&1", harness_cli(), gen_link);
+    out = harness_run(cmd, &st);
+    REQUIRE(out);
+    CHECK_EQ_INT(st, 1);
+    free(out);
+    CHECK_MSG(lstat(gen_link, &ls) == 0 && S_ISLNK(ls.st_mode),
+              "a failed gen removed the link %s", gen_link);
+    remove(gen_link);
+    remove(link);
+    remove(target);
 }

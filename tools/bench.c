@@ -631,10 +631,8 @@ int cmd_bench(int argc, char **argv)
         bsp_accel_destroy(naive);
         bsp_scene_destroy(scene);
     }
-    if (o.csv && fclose(o.csv) != 0) {
-        fprintf(stderr, "%s: %s: write failed: %s\n", prog, csv_path, strerror(errno));
+    if (o.csv && !close_output(o.csv, csv_path))
         rc = EXIT_INPUT;
-    }
     if (rc == 0 && plot_path && !write_plot(plot_path, rows, nrows, &o))
         rc = EXIT_INPUT;
     free(rows);

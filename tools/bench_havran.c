@@ -154,10 +154,8 @@ int havran_bench_main(int argc, char **argv, const havran_bench *b)
         printf("%s\n\n", b->variant_captions[run.variant]);
     printf("%s\n", b->table_header[v]);
     int rc = havran_each_scene(&cl, b->each, &run);
-    if (run.csv && fclose(run.csv) != 0) {
-        fprintf(stderr, "%s: %s: write failed\n", prog, cl.csv_path);
+    if (run.csv && !close_output(run.csv, cl.csv_path))
         rc = EXIT_INPUT;
-    }
     bench_free_cmdline(&cl);
     return rc;
 }

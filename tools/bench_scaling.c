@@ -444,10 +444,8 @@ int bench_scaling(int argc, char **argv)
     int rc = mismatch ? EXIT_INPUT : 0;
     if (!mismatch && plot_path && !write_plot(plot_path, rows, nrows))
         rc = EXIT_INPUT;
-    if (csv && fclose(csv) != 0) {
-        fprintf(stderr, "%s: %s: write failed: %s\n", prog, csv_path, strerror(errno));
+    if (csv && !close_output(csv, csv_path))
         rc = EXIT_INPUT;
-    }
     free(rows);
     bench_free_cmdline(&o.cl);
     return rc;

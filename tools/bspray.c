@@ -119,11 +119,8 @@ static int close_ray_files(ray_files *rf)
 {
     int ok = 1;
     for (int c = 0; c < BSP_RAY_CLASS_COUNT; c++) {
-        int bad = ferror(rf->f[c]);
-        if (fclose(rf->f[c]) != 0 || bad) {
-            fprintf(stderr, "%s: %s: write failed\n", prog, rf->path[c]);
+        if (!close_output(rf->f[c], rf->path[c]))
             ok = 0;
-        }
     }
     return ok;
 }
@@ -261,11 +258,7 @@ static int write_stats_json(const char *path, const char *scene_name, const bsp_
     json_class(f, "shadow", S, 0);
     json_class(f, "secondary", R, 1);
     fprintf(f, "  }\n}\n");
-    if (fclose(f) != 0) {
-        fprintf(stderr, "%s: %s: write failed: %s\n", prog, path, strerror(errno));
-        return 0;
-    }
-    return 1;
+    return close_output(f, path);
 }
 
 static int cmd_render(int argc, char **argv)
@@ -420,9 +413,11 @@ static int cmd_render(int argc, char **argv)
             rc = EXIT_INPUT;
         if (costs) {
             bsp_image *map = costmap_draw(costs, cost_w, cost_h, cost_measure);
-            if (!map || bsp_image_write(map, cost_path, &err) != BSP_OK) {
-                fprintf(stderr, "%s: %s: %s\n", prog, cost_path,
-                        map ? err.message : "out of memory for the cost map");
+            if (!map) {
+                fprintf(stderr, "%s: %s: out of memory for the cost map\n", prog, cost_path);
+                rc = EXIT_INPUT;
+            } else if (bsp_image_write(map, cost_path, &err) != BSP_OK) {
+                fprintf(stderr, "%s: %s\n", prog, err.message); /* it names the file */
                 rc = EXIT_INPUT;
             } else if (!quiet) {
                 fprintf(stderr, "%s: wrote %s\n", prog, cost_path);
@@ -698,17 +693,12 @@ static int cmd_gen(int argc, char **argv)
         rc = EXIT_INPUT;
     }
     if (out != stdout) {
-        if (fclose(out) != 0 && rc == 0) {
-            fprintf(stderr, "%s: %s: write failed: %s\n", prog, out_path, strerror(errno));
+        if (!close_output(out, out_path))
             rc = EXIT_INPUT;
-        }
         if (rc)
-            remove(out_path);
-    } else if (fflush(stdout) != 0 && rc == 0) {
-        fprintf(stderr, "%s: write failed: %s\n", prog, strerror(errno));
-        rc = EXIT_INPUT;
+            remove_partial_output(out_path);
     }
-    return rc;
+    return finish_stdout(rc);
 }
 
 /* --- calibrate ---------------------------------------------------------------------------- */
@@ -776,7 +766,7 @@ static void print_main_help(FILE *f)
             BSPRAY_VERSION_STRING, bsp_spd_scene_names());
 }
 
-int main(int argc, char **argv)
+static int run_command(int argc, char **argv)
 {
     if (argc < 2) {
         print_main_help(stderr);
@@ -812,4 +802,9 @@ int main(int argc, char **argv)
     fprintf(stderr, "%s: unknown command '%s'\n", prog, cmd);
     print_main_help(stderr);
     return EXIT_USAGE;
+}
+
+int main(int argc, char **argv)
+{
+    return finish_stdout(run_command(argc, argv));
 }

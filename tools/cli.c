@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -834,11 +835,7 @@ int write_stats_json_file(const char *path, const char *scene_path, const bsp_sc
         fprintf(f, "    \"accel\": \"%s\"\n  }", bsp_accel_kind_name(kind));
     }
     fputs("\n}\n", f);
-    if (fclose(f) != 0) {
-        fprintf(stderr, "%s: %s: write failed: %s\n", prog, path, strerror(errno));
-        return 0;
-    }
-    return 1;
+    return close_output(f, path);
 }
 
 const char view_args_help[] =
@@ -935,9 +932,45 @@ fail:
     exit(EXIT_INPUT);
 }
 
+int close_output(FILE *f, const char *path)
+{
+    int failed = ferror(f) != 0, saved = 0; /* an earlier flush's error: its errno is gone */
+    if (fclose(f) != 0) {
+        failed = 1;
+        saved = errno;
+    }
+    if (failed)
+        fprintf(stderr, "%s: %s: write failed%s%s\n", prog, path, saved ? ": " : "",
+                saved ? strerror(saved) : "");
+    return !failed;
+}
+
+void remove_partial_output(const char *path)
+{
+    struct stat st;
+    if (lstat(path, &st) == 0 && S_ISREG(st.st_mode))
+        remove(path);
+}
+
+int finish_stdout(int status)
+{
+    errno = 0;
+    int failed = ferror(stdout) != 0;
+    if (fflush(stdout) != 0)
+        failed = 1;
+    if (failed && status == 0) {
+        int saved = errno;
+        fprintf(stderr, "%s: standard output: write failed%s%s\n", prog, saved ? ": " : "",
+                saved ? strerror(saved) : "");
+        return EXIT_INPUT;
+    }
+    return status;
+}
+
 int output_path_writable(const char *path)
 {
-    const int existed = access(path, F_OK) == 0;
+    struct stat st;
+    const int existed = lstat(path, &st) == 0; /* a symbolic link to nothing yet, too */
     FILE *f = fopen(path, "ab"); /* appends nothing: the file stays as it is */
     if (!f) {
         fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, path, strerror(errno));

@@ -31,6 +31,17 @@ const char *opt_value(args *a, const char *opt);
  * the end): 1, or 0 with a message naming it. Leaves no file behind that
  * was not there. */
 int output_path_writable(const char *path);
+/* Closes F, an output file written to PATH: 1, or 0 with a message naming
+ * PATH when a write failed (a full disk), also one whose error an earlier
+ * fflush met. */
+int close_output(FILE *f, const char *path);
+/* Removes PATH, a partial output, when it is a regular file (never a device
+ * such as /dev/null, or what a symbolic link names). */
+void remove_partial_output(const char *path);
+/* The status a command ends with, once standard output is flushed: STATUS,
+ * or EXIT_INPUT with a message when writing to it failed (a full disk, a
+ * closed pipe) and STATUS was 0. */
+int finish_stdout(int status);
 /* A whole number in [LO, HI] as the value of OPT, or a usage error. */
 int parse_int(args *a, const char *opt, long lo, long hi);
 /* The expansion of macro X as a string literal (a constant inside help texts). */

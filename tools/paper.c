@@ -596,10 +596,8 @@ int bench_paper(int argc, char **argv)
         rc = 1;
     if (csv) {
         csv_rows(csv, &t);
-        if (fclose(csv) != 0) {
-            fprintf(stderr, "%s: %s: write failed: %s\n", prog, csv_path, strerror(errno));
+        if (!close_output(csv, csv_path))
             rc = 1;
-        }
     }
     free(t.cells);
     bench_free_cmdline(&o.cl);

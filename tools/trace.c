@@ -259,11 +259,7 @@ static int write_json(const char *path, const char *scene, const trace_run *r,
     tree_stats_json(f, "  ", t, bsp_accel_get_kind(r->accel));
     tree_time_json(f, "  ", r->tree_path, bsp_accel_build_seconds(r->accel));
     fprintf(f, "  \"T_TR\": %.6f\n}\n", r->seconds);
-    if (fclose(f) != 0) {
-        fprintf(stderr, "%s: %s: write failed: %s\n", prog, path, strerror(errno));
-        return 0;
-    }
-    return 1;
+    return close_output(f, path);
 }
 
 static int alloc_batch(trace_batch *b, int any)
@@ -378,10 +374,7 @@ int cmd_trace(int argc, char **argv)
     free(line);
     if (in != stdin)
         fclose(in);
-    if (fflush(stdout) != 0) {
-        fprintf(stderr, "%s: write failed: %s\n", prog, strerror(errno));
-        rc = EXIT_INPUT;
-    }
+    rc = finish_stdout(rc); /* the answers written before the figures */
     if (rc == 0 && (stats || json_path)) {
         bsp_tree_stats ts;
         bsp_accel_tree_stats(accel, &ts);

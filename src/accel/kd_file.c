@@ -211,7 +211,13 @@ bsp_status bsp_accel_save(const bsp_accel *a, const char *path, bsp_error *err)
     if (!part)
         return error_set(err, BSP_ERR_NOMEM, path, 0, "out of memory");
     snprintf(part, plen + 32, "%s.part%ld", path, (long)getpid());
-    writer w = {fopen(part, "wb"), crc32(0L, Z_NULL, 0), 0};
+    /* A new or regular file is written beside PATH and renamed over it, so
+     * that a failed save leaves no half file. Anything else (a device such as
+     * /dev/null, a pipe, a symbolic link) is written where it is: renaming
+     * over it would replace it with a file. */
+    struct stat ps;
+    const int in_place = lstat(path, &ps) == 0 && !S_ISREG(ps.st_mode);
+    writer w = {fopen(in_place ? path : part, "wb"), crc32(0L, Z_NULL, 0), 0};
     if (!w.f) {
         bsp_status st = error_set(err, BSP_ERR_IO, path, 0, "cannot write: %s", strerror(errno));
         free(part);
@@ -246,13 +252,14 @@ bsp_status bsp_accel_save(const bsp_accel *a, const char *path, bsp_error *err)
         w.failed = 1;
         saved_errno = errno;
     }
-    if (!w.failed && rename(part, path) != 0) {
+    if (!w.failed && !in_place && rename(part, path) != 0) {
         w.failed = 1;
         saved_errno = errno;
     }
     bsp_status st = BSP_OK;
     if (w.failed) {
-        remove(part);
+        if (!in_place)
+            remove(part);
         st = error_set(err, BSP_ERR_IO, path, 0, "cannot write: %s", strerror(saved_errno));
     }
     free(part);
