@@ -289,6 +289,14 @@ TEST(cli_trace_threads_exact_and_stats)
     snprintf(where, sizeof where, "%s:4: malformed or non-finite number", bad_path);
     CHECK_STR_CONTAINS(out, where);
     free(out);
+    /* a directory as the ray file: refused by name before any work */
+    snprintf(cmd, sizeof cmd, "%s trace spd:rings --rays %s 2>&1", harness_cli(), harness_tmpdir());
+    out = harness_run(cmd, &status);
+    REQUIRE(out);
+    CHECK_EQ_INT(status, 1);
+    snprintf(where, sizeof where, "%s: cannot read: Is a directory", harness_tmpdir());
+    CHECK_STR_CONTAINS(out, where);
+    free(out);
     snprintf(cmd, sizeof cmd, "%s trace spd:rings --rays %s --stats 2>&1 >/dev/null", harness_cli(),
              rays_path);
     out = harness_run(cmd, &status);

@@ -329,6 +329,11 @@ int cmd_trace(int argc, char **argv)
     struct stat in_stat;
     if (fstat(fileno(in), &in_stat) == 0 && S_ISREG(in_stat.st_mode))
         run.in_size = (double)in_stat.st_size;
+    if (fstat(fileno(in), &in_stat) == 0 && S_ISDIR(in_stat.st_mode)) {
+        fprintf(stderr, "%s: %s: cannot read: %s\n", prog, rays_path, strerror(EISDIR));
+        fclose(in);
+        return EXIT_INPUT;
+    }
     run.in = in;
     bsp_scene *scene = load_scene(scene_path);
     apply_view_args(scene, scene_path, &view, &bopts, NULL);
@@ -364,8 +369,8 @@ int cmd_trace(int argc, char **argv)
         if (++b.n == TRACE_BATCH && !shoot_and_print(&run, &b))
             rc = EXIT_INPUT;
     }
-    if (rc == 0 && ferror(in)) {
-        fprintf(stderr, "%s: %s: read failed\n", prog, rays_path);
+    if (rc == 0 && ferror(in)) { /* errno: getline's, the last call made */
+        fprintf(stderr, "%s: %s: read failed: %s\n", prog, rays_path, strerror(errno));
         rc = EXIT_INPUT;
     }
     if (rc == 0 && !shoot_and_print(&run, &b))
