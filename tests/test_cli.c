@@ -522,6 +522,29 @@ TEST(cli_gen_round_trip)
     }
     CHECK_MSG(digest[0][0] && strcmp(digest[0], digest[1]) == 0, "digests %s (generated), %s (file)",
               digest[0], digest[1]);
+    /* the name may carry the size and level as a SCENE does: the same text */
+    char *by_options = NULL, *by_name = NULL;
+    snprintf(cmd, sizeof cmd, "%s gen balls -s 2 -t 4", harness_cli());
+    by_options = harness_run(cmd, &st);
+    REQUIRE(by_options);
+    CHECK_EQ_INT(st, 0);
+    snprintf(cmd, sizeof cmd, "%s gen spd:balls:2:t4", harness_cli());
+    by_name = harness_run(cmd, &st);
+    REQUIRE(by_name);
+    CHECK_EQ_INT(st, 0);
+    CHECK_MSG(strlen(by_options) > 1000 && strcmp(by_options, by_name) == 0,
+              "gen spd:balls:2:t4 differs from gen balls -s 2 -t 4");
+    free(by_options);
+    free(by_name);
+    static const char *const bad[] = {"balls:x", "balls:", "balls:1:t1", "balls:2 -s 3"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        snprintf(cmd, sizeof cmd, "%s gen %s 2>&1 >/dev/null", harness_cli(), bad[i]);
+        out = harness_run(cmd, &st);
+        REQUIRE(out);
+        CHECK_MSG(st == 2 && strstr(out, "usage: bspray gen"), "gen %s: status %d, '%s'", bad[i],
+                  st, out);
+        free(out);
+    }
 }
 
 /* Every file of the NFF malformed corpus fails through the CLI with exit

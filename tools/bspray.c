@@ -652,8 +652,9 @@ static void print_gen_help(void)
         if (bsp_spd_scene_sizes(tok, &def, &lo, &hi))
             printf("  %-10s default %d, %d..%d\n", tok, def, lo, hi);
     }
-    printf("\nAny SCENE argument also accepts spd:NAME[:SIZE][:tN] directly, e.g. spd:tree:11\n"
-           "or spd:balls:4:t8 (tessellated at level N, as gen -t N writes it).\n");
+    printf("\nNAME may also be given as a SCENE is, spd:NAME[:SIZE][:tN] (gen spd:balls:4:t8 is\n"
+           "gen balls -s 4 -t 8). Any SCENE argument accepts that form directly, e.g.\n"
+           "spd:tree:11 or spd:balls:4:t8 (tessellated at level N, as gen -t N writes it).\n");
 }
 
 static int cmd_gen(int argc, char **argv)
@@ -680,6 +681,34 @@ static int cmd_gen(int argc, char **argv)
         die_usage(a.usage, "%s", "missing NAME");
     if (!strncmp(name, "spd:", 4))
         name += 4;
+    /* NAME may carry its size factor and level as a SCENE does: NAME[:SIZE][:tN] */
+    char base[64];
+    const char *colon = strchr(name, ':');
+    if (colon) {
+        if ((size_t)(colon - name) >= sizeof base)
+            die_usage(a.usage, "unknown SPD scene '%s'", name);
+        memcpy(base, name, (size_t)(colon - name));
+        base[colon - name] = '\0';
+        for (const char *p = colon; *p == ':';) {
+            const char *part = p + 1;
+            size_t len = strcspn(part, ":");
+            char *end;
+            long v = strtol(part + (*part == 't'), &end, 10);
+            if (len == 0 || end != part + len || part[*part == 't'] < '0' ||
+                part[*part == 't'] > '9')
+                die_usage(a.usage, "bad scene '%s' (expected NAME[:SIZE][:tN])", name);
+            if (*part == 't' && !tessellate)
+                tessellate = v >= 2 && v <= 64 ? (int)v : -1;
+            else if (*part != 't' && !size)
+                size = v >= 1 && v <= 100000 ? (int)v : -1;
+            else
+                die_usage(a.usage, "scene '%s' repeats a size or level given apart", name);
+            if (size < 0 || tessellate < 0)
+                die_usage(a.usage, "bad size or level in scene '%s'", name);
+            p = part + len;
+        }
+        name = base;
+    }
     FILE *out = out_path ? fopen(out_path, "w") : stdout;
     if (!out) {
         fprintf(stderr, "%s: %s: cannot open for writing: %s\n", prog, out_path, strerror(errno));
