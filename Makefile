@@ -8,6 +8,7 @@
 #                   (fewer random rays: BSPRAY_TEST_QUICK=1)
 #   make embree-compare  build/bspray-embree: primary-ray throughput against Intel Embree 3
 #                   on the same rays (needs libembree-dev; docs/embree.md). Not part of `all`.
+#   make tsan-test  the tests that run threads under ThreadSanitizer (needs clang)
 #   make fuzz       build-fuzz/fuzz_*: libFuzzer targets (needs clang; fuzz/run.sh runs them)
 #   make install    PREFIX=/usr/local (and DESTDIR for staging): both libraries, the
 #                   headers, the CLI and a pkg-config file (bspray.pc)
@@ -63,7 +64,7 @@ CLI   := $(BUILD)/bspray
 TESTS := $(BUILD)/bspray_tests
 EMBREE_CLI := $(BUILD)/bspray-embree
 
-.PHONY: all run test asan-test clean embree-compare examples install shared fuzz
+.PHONY: all run test asan-test tsan-test clean embree-compare examples install shared fuzz
 all: $(LIB) $(PUBLIC_LIB) $(BUILD)/libbspray.so $(CLI) $(TESTS) $(EXAMPLES) $(EXAMPLES_SHARED)
 examples: $(EXAMPLES) $(EXAMPLES_SHARED)
 shared: $(BUILD)/libbspray.so
@@ -150,6 +151,20 @@ test: $(CLI) $(TESTS) $(EXAMPLES) $(EXAMPLES_SHARED) $(BUILD)/tests/names_apart 
 asan-test:
 	BSPRAY_TEST_QUICK=1 $(MAKE) BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer" \
 	    SAN="-fsanitize=address,undefined -fno-sanitize-recover=all" test
+
+# The tests that run threads, under ThreadSanitizer (needs clang): ray
+# batches, renders on one and two threads, the parallel SAH build (1 and 3
+# threads, byte for byte), and the allocation sweep's two-thread scenarios.
+# A race report exits the program with status 66, which fails the test.
+TSAN_BUILD := build-tsan
+TSAN_TESTS := batch_ render_identical render_tiles sah_build_is_deterministic every_allocation
+tsan-test:
+	$(MAKE) BUILD=$(TSAN_BUILD) CC=clang CXX=clang++ OPT="-O1 -g" SAN="-fsanitize=thread" \
+	    $(TSAN_BUILD)/bspray $(TSAN_BUILD)/bspray_tests $(TSAN_BUILD)/tests/oom_sweep
+	for t in $(TSAN_TESTS); do \
+	    BSPRAY_TEST_QUICK=1 BSPRAY_CLI=./$(TSAN_BUILD)/bspray TSAN_OPTIONS=halt_on_error=1 \
+	        ./$(TSAN_BUILD)/bspray_tests $$t || exit 1; \
+	done
 
 # Fuzz targets (fuzz/, libFuzzer: needs clang): the library built again with
 # the sanitizers and libFuzzer's coverage, and one program per target.
