@@ -345,10 +345,10 @@ TEST(every_allocation_failing_in_turn_gives_nomem_or_the_right_answer)
     REQUIRE(out);
     CHECK_MSG(status == 0, "'%s' exited with %d: %s", cmd, status, out);
     CHECK_STR_CONTAINS(out, "oom_sweep: every run held");
-    /* the sweep did fail allocations: the SAH build of the teapot, and the
-     * OBJ reader, were refused at some and held at others */
+    /* the sweep did fail allocations: the SAH build of the teapot, the OBJ
+     * reader, a tree file and a scene made by the add_* calls were refused */
     static const char *const names[] = {"build sah spd:teapot:2", "load polygons.obj",
-                                        "tree file spd:gears:1"};
+                                        "tree file spd:gears:1", "scene in code"};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
         const char *line = strstr(out, names[i]);
         long allocs = 0, runs = 0, refused = 0;

@@ -236,6 +236,83 @@ static int answers_hold(const bsp_accel *a, const scenario *sc, char *why, size_
     return same_hits(hits, sc->ref_hits, why, n) ? RUN_OK : RUN_WRONG;
 }
 
+/* The scene of run_scene_in_code, made through the API's add_* calls: a
+ * material, a light, a camera, a sphere, a cone, a polygon, a patch and an
+ * indexed mesh of a G x G grid (200 triangles), with normals. Each call's
+ * status is its own; the mesh is all or nothing. BSP_OK or the first
+ * failure's status (ERR says which). */
+#define MESH_G 10
+static bsp_status make_scene_in_code(bsp_scene *s, bsp_error *err)
+{
+    static bsp_vec3 verts[(MESH_G + 1) * (MESH_G + 1)], normals[(MESH_G + 1) * (MESH_G + 1)];
+    static uint32_t idx[6 * MESH_G * MESH_G];
+    for (int j = 0; j <= MESH_G; j++)
+        for (int i = 0; i <= MESH_G; i++) {
+            verts[j * (MESH_G + 1) + i] = bsp_v3(i, j, 0.1 * ((i * j) % 3));
+            normals[j * (MESH_G + 1) + i] = bsp_v3(0, 0, 1);
+        }
+    for (int j = 0, t = 0; j < MESH_G; j++)
+        for (int i = 0; i < MESH_G; i++, t++) {
+            uint32_t a = (uint32_t)(j * (MESH_G + 1) + i), b = a + 1, c = a + MESH_G + 1;
+            uint32_t d = c + 1, *q = &idx[6 * t];
+            q[0] = a, q[1] = b, q[2] = d, q[3] = a, q[4] = d, q[5] = c;
+        }
+    const bsp_material m = {{0.8, 0.2, 0.1}, 0.7, 0.3, 20.0, 0.0, 1.0};
+    const bsp_light l = {bsp_v3(5, 5, 20), {1, 1, 1}, 0};
+    const bsp_camera cam = {bsp_v3(5, -10, 8), bsp_v3(5, 5, 0), bsp_v3(0, 0, 1), 45.0, 0.01, 32, 32};
+    const bsp_vec3 poly[4] = {bsp_v3(-1, -1, -1), bsp_v3(12, -1, -1), bsp_v3(12, 12, -1),
+                              bsp_v3(-1, 12, -1)};
+    bsp_status st = bsp_scene_set_material(s, &m, err);
+    if (st == BSP_OK)
+        st = bsp_scene_add_light(s, &l, err);
+    if (st == BSP_OK)
+        st = bsp_scene_set_camera(s, &cam, err);
+    if (st == BSP_OK)
+        st = bsp_scene_add_sphere(s, bsp_v3(3, 3, 2), 1.0, err);
+    if (st == BSP_OK)
+        st = bsp_scene_add_cone(s, bsp_v3(7, 7, 0), 1.0, bsp_v3(7, 7, 3), 0.5, err);
+    if (st == BSP_OK)
+        st = bsp_scene_add_polygon(s, poly, 4, err);
+    if (st == BSP_OK)
+        st = bsp_scene_add_patch(s, verts, normals, 3, err);
+    if (st == BSP_OK) {
+        size_t before = bsp_scene_prim_count(s);
+        st = bsp_scene_add_triangles(s, verts, (MESH_G + 1) * (MESH_G + 1), normals, idx,
+                                     2 * MESH_G * MESH_G, err);
+        if (st != BSP_OK && bsp_scene_prim_count(s) != before) {
+            snprintf(err->message, sizeof err->message,
+                     "a failed add_triangles added %zu primitives", bsp_scene_prim_count(s) - before);
+            return BSP_ERR_INVALID; /* not all or nothing: reported as wrong */
+        }
+    }
+    return st;
+}
+
+static int run_scene_in_code(const scenario *sc, char *why, size_t n)
+{
+    bsp_scene *s = bsp_scene_create();
+    if (!s) {
+        disarm();
+        return RUN_NOMEM; /* the documented refusal: NULL */
+    }
+    bsp_error err = {0};
+    bsp_status st = make_scene_in_code(s, &err);
+    disarm();
+    int r = RUN_OK;
+    if (st != BSP_OK) {
+        r = refused(st, &err, why, n);
+    } else {
+        bsp_box b = bsp_scene_bounds(s);
+        if (bsp_scene_prim_count(s) != sc->ref_prims || memcmp(&b, &sc->ref_bounds, sizeof b)) {
+            snprintf(why, n, "%zu primitives, %zu without failures", bsp_scene_prim_count(s),
+                     sc->ref_prims);
+            r = RUN_WRONG;
+        }
+    }
+    bsp_scene_destroy(s);
+    return r;
+}
+
 static void build_options(const scenario *sc, bsp_build_options *o)
 {
     bsp_build_options_defaults(o);
@@ -486,6 +563,21 @@ int main(int argc, char **argv)
     }
 
     /* loading: each reader, a gzip file and a generated scene */
+    /* a scene made in code, through every add_* call */
+    {
+        scenario sc = {.run = run_scene_in_code};
+        snprintf(sc.name, sizeof sc.name, "scene in code");
+        bsp_scene *s = bsp_scene_create();
+        bsp_error err;
+        if (!s || make_scene_in_code(s, &err) != BSP_OK) {
+            fprintf(stderr, "oom_sweep: the scene in code: %s\n", s ? err.message : "no memory");
+            return 2;
+        }
+        sc.ref_prims = bsp_scene_prim_count(s);
+        sc.ref_bounds = bsp_scene_bounds(s);
+        bsp_scene_destroy(s);
+        sweep(&sc);
+    }
     const char *loads[] = {nff, obj, ply, gz, "spd:teapot:2"};
     for (size_t i = 0; i < sizeof loads / sizeof loads[0]; i++) {
         scenario sc = {.run = run_load, .path = loads[i]};
