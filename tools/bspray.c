@@ -727,7 +727,7 @@ static int cmd_gen(int argc, char **argv)
         if (rc)
             remove_partial_output(out_path);
     }
-    return finish_stdout(rc);
+    return rc; /* standard output: checked by main (finish_stdout) */
 }
 
 /* --- calibrate ---------------------------------------------------------------------------- */

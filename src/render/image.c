@@ -16,8 +16,6 @@
 
 #include "bspray/render.h"
 
-#define IMAGE_MAX_PIXELS BSP_IMAGE_MAX_PIXELS
-
 static bsp_status image_fail(bsp_error *err, bsp_status status, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
@@ -36,7 +34,7 @@ static bsp_status image_fail(bsp_error *err, bsp_status status, const char *fmt,
 static int image_valid(const bsp_image *img)
 {
     return img && img->rgb && img->width > 0 && img->height > 0 &&
-           (long long)img->width <= IMAGE_MAX_PIXELS / img->height;
+           (long long)img->width <= BSP_IMAGE_MAX_PIXELS / img->height;
 }
 
 /* Clamps to [0,1] and maps to 0..255; NaN gives 0. */
@@ -62,7 +60,7 @@ bsp_image *bsp_image_create(int width, int height)
 {
     if (width <= 0 || height <= 0)
         return NULL;
-    if ((long long)width > IMAGE_MAX_PIXELS / height)
+    if ((long long)width > BSP_IMAGE_MAX_PIXELS / height)
         return NULL;
     bsp_image *img = malloc(sizeof *img);
     if (!img)
@@ -313,7 +311,7 @@ bsp_status bsp_image_read_png(const char *path, bsp_image **out, bsp_error *err)
         png_longjmp(png, 1);
     }
     if (w == 0 || h == 0 || w > INT_MAX || h > INT_MAX ||
-        (long long)w > IMAGE_MAX_PIXELS / (long long)h) {
+        (long long)w > BSP_IMAGE_MAX_PIXELS / (long long)h) {
         fail_status = BSP_ERR_LIMIT;
         snprintf(ctx.message, sizeof ctx.message, "PNG of %lu x %lu pixels is too large",
                  (unsigned long)w, (unsigned long)h);

@@ -389,6 +389,17 @@ static int same_image(const bsp_image *a, const bsp_image *b)
            memcmp(a->rgb, b->rgb, sizeof(float) * 3 * (size_t)a->width * (size_t)a->height) == 0;
 }
 
+/* Whether IMG (made under failures; destroyed here) equals REF; WHY says
+ * which image differed. */
+static int image_holds(bsp_image *img, const bsp_image *ref, const char *what, char *why, size_t n)
+{
+    int same = same_image(img, ref);
+    if (!same)
+        snprintf(why, n, "%s differs from the one made without failures", what);
+    bsp_image_destroy(img);
+    return same ? RUN_OK : RUN_WRONG;
+}
+
 static int run_render(const scenario *sc, char *why, size_t n)
 {
     bsp_render_options o;
@@ -399,11 +410,7 @@ static int run_render(const scenario *sc, char *why, size_t n)
     disarm();
     if (st != BSP_OK)
         return refused(st, &err, why, n);
-    int same = same_image(img, sc->ref_image);
-    if (!same)
-        snprintf(why, n, "the image differs from the one rendered without failures");
-    bsp_image_destroy(img);
-    return same ? RUN_OK : RUN_WRONG;
+    return image_holds(img, sc->ref_image, "the image rendered", why, n);
 }
 
 /* The image written as PNG under failures, then read back without. */
@@ -419,11 +426,7 @@ static int run_png_write(const scenario *sc, char *why, size_t n)
         snprintf(why, n, "the PNG written cannot be read: %s", err.message);
         return RUN_WRONG;
     }
-    int same = same_image(back, sc->ref_png);
-    if (!same)
-        snprintf(why, n, "the PNG written differs from the one written without failures");
-    bsp_image_destroy(back);
-    return same ? RUN_OK : RUN_WRONG;
+    return image_holds(back, sc->ref_png, "the PNG written", why, n);
 }
 
 /* The PNG read under failures. */
@@ -435,11 +438,7 @@ static int run_png_read(const scenario *sc, char *why, size_t n)
     disarm();
     if (st != BSP_OK)
         return refused(st, &err, why, n);
-    int same = same_image(img, sc->ref_png);
-    if (!same)
-        snprintf(why, n, "the PNG read differs from the one read without failures");
-    bsp_image_destroy(img);
-    return same ? RUN_OK : RUN_WRONG;
+    return image_holds(img, sc->ref_png, "the PNG read", why, n);
 }
 
 static int run_tree_file(const scenario *sc, char *why, size_t n)
