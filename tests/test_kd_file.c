@@ -489,6 +489,13 @@ TEST(cli_build_and_tree_give_the_built_answers)
     CHECK_STR_CONTAINS(out, tree);
     CHECK_STR_CONTAINS(out, "another scene");
     free(out);
+    /* stats refuses such a tree before it prints anything of the scene */
+    snprintf(cmd, sizeof cmd, "%s stats spd:balls --tree %s 2>/dev/null", cli, tree);
+    out = harness_run(cmd, &status);
+    REQUIRE(out);
+    CHECK_EQ_INT(status, 1);
+    CHECK_MSG(out[0] == '\0', "stats with a tree of another scene printed: %.200s", out);
+    free(out);
     snprintf(cmd, sizeof cmd, "%s build spd:teapot -o %s --accel naive 2>&1", cli, tree);
     out = harness_run(cmd, &status);
     REQUIRE(out);

@@ -489,6 +489,9 @@ static int cmd_stats(int argc, char **argv)
         return EXIT_INPUT;
     bsp_scene *scene = load_scene(scene_path);
     apply_view_args(scene, scene_path, &view, &bopts, NULL);
+    /* the structure first: a tree file that does not load, or a build that
+     * fails, ends the command before anything is printed */
+    bsp_accel *accel = want_tree ? tree_or_build(&a, scene, &bopts, tree_path) : NULL;
     size_t n = bsp_scene_prim_count(scene);
     printf("scene: %s\n", scene_path);
     printf("primitives: %zu\n", n);
@@ -556,10 +559,8 @@ static int cmd_stats(int argc, char **argv)
     bsp_scene_background(scene, bg);
     printf("background: %g %g %g\n", bg[0], bg[1], bg[2]);
     int rc = 0, checked = 0;
-    bsp_accel *accel = NULL;
     bsp_tree_stats t;
-    if (want_tree) {
-        accel = tree_or_build(&a, scene, &bopts, tree_path);
+    if (accel) {
         bsp_accel_tree_stats(accel, &t);
         bsp_accel_kind kind = bsp_accel_get_kind(accel);
         printf("structure: %s%s%s\n", accel_label(accel), tree_path ? ", loaded from " : "",
