@@ -541,6 +541,27 @@ static int gzip_copy(const char *src, const char *dst)
     return ok;
 }
 
+/* Whether SC's build, without failures, cuts by the leaf budget's estimate
+ * (so that a sweep of it covers the estimate); says why not on stderr. */
+static int budget_estimated(const scenario *sc)
+{
+    bsp_build_options o;
+    build_options(sc, &o);
+    bsp_accel *a = NULL;
+    bsp_error err;
+    if (bsp_accel_build(sc->scene, &o, &a, &err) != BSP_OK) {
+        fprintf(stderr, "oom_sweep: %s\n", err.message);
+        return 0;
+    }
+    bsp_tree_stats t;
+    bsp_accel_tree_stats(a, &t);
+    bsp_accel_destroy(a);
+    if (!(t.budget_cut > 0.0))
+        fprintf(stderr, "oom_sweep: %s: the build made no estimate of its leaf budget\n",
+                sc->name);
+    return t.budget_cut > 0.0;
+}
+
 static const char *const scene_names[] = {"spd:balls:1", "spd:tree:3", "spd:teapot:2",
                                           "spd:gears:1"};
 #define NSCENES (sizeof scene_names / sizeof scene_names[0])
@@ -680,6 +701,33 @@ int main(int argc, char **argv)
         bsp_image_destroy(png_img);
         bsp_image_destroy(img);
         bsp_accel_destroy(a);
+        bsp_scene_destroy(s);
+    }
+    /* The leaf budget's estimate from sampled subtrees ("probes", built as
+     * tasks: kd_sah_tasks.c) needs enough of them, so a scene of thousands
+     * of primitives; on one thread and on two (probes and tasks taken by the
+     * workers, the estimate made while they wait). */
+    {
+        bsp_scene *s = load_or_die("spd:balls:4");
+        make_rays(bsp_scene_bounds(s), rays);
+        bsp_accel *naive = build_or_die(s, BSP_ACCEL_NAIVE);
+        if (!answer(naive, rays, ref))
+            return 2;
+        bsp_accel_destroy(naive);
+        for (int threads = 1; threads <= 2; threads++) {
+            scenario sc = {.run = run_build,
+                           .scene = s,
+                           .kind = BSP_ACCEL_SAH,
+                           .budget = 1,
+                           .threads = threads,
+                           .rays = rays,
+                           .ref_hits = ref};
+            snprintf(sc.name, sizeof sc.name, "build sah+estimate%s spd:balls:4",
+                     threads > 1 ? "+2threads" : "");
+            if (!budget_estimated(&sc))
+                return 2;
+            sweep(&sc);
+        }
         bsp_scene_destroy(s);
     }
     remove(gz);
