@@ -387,7 +387,7 @@ void json_real(FILE *f, double x)
 int kind_builds_in_parallel(bsp_accel_kind k)
 {
     return k != BSP_ACCEL_NAIVE && k != BSP_ACCEL_KAPLAN && k != BSP_ACCEL_GRID &&
-           k != BSP_ACCEL_OCTREE;
+           k != BSP_ACCEL_OCTREE && k != BSP_ACCEL_BVH;
 }
 
 void tree_stats_json(FILE *f, const char *indent, const bsp_tree_stats *t, bsp_accel_kind kind)
@@ -681,8 +681,9 @@ void cells_variant_json(FILE *f, const char *indent, const bsp_accel *accel)
 
 const char build_args_help[] =
     "  --accel METHOD     acceleration method: sah (default), sah-per, sah-par, sah-mixed,\n"
-    "                     kaplan, grid (a uniform grid), octree (--octree-split), naive\n"
-    "                     (sah-per/-par/-mixed build for the camera's rays); also\n"
+    "                     kaplan, grid (a uniform grid), octree (--octree-split), bvh\n"
+    "                     (a binned-SAH bounding volume hierarchy, to compare with),\n"
+    "                     naive (sah-per/-par/-mixed build for the camera's rays); also\n"
     "                     octree-cost, grid-bounds and grid-rec (the octree with\n"
     "                     --octree-split cost, the grid with --grid-assign bounds, the\n"
     "                     recursive grid of --grid-levels 2)\n"

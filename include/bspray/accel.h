@@ -50,6 +50,11 @@ typedef enum bsp_accel_kind {
                             their bounds, as in Havran's 1999 octree statistics; cut
                             at the centre or by a cost estimate (octree_split).
                             max_depth counts octree levels */
+    BSP_ACCEL_BVH,       /* bounding volume hierarchy: binary, object partitioning, binned
+                            SAH (Wald 2007) with the kd-trees' per-kind costs T_i, at
+                            most 8 primitives per leaf; the structure most ray tracers
+                            use, for comparison. One build thread; max_depth,
+                            max_leaf_prims and the mailbox do not apply */
     BSP_ACCEL_KIND_COUNT
 } bsp_accel_kind;
 

@@ -7,13 +7,14 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "accel/bvh.h"
 #include "accel/grid.h"
 #include "accel/kd_cost.h"
 #include "accel/kd_mixed_check.h"
 #include "accel/kd_tree.h"
 
 static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {
-    "naive", "kaplan", "sah", "sah-per", "sah-par", "sah-mixed", "grid", "octree"};
+    "naive", "kaplan", "sah", "sah-per", "sah-par", "sah-mixed", "grid", "octree", "bvh"};
 
 size_t accel_max_bytes(const bsp_build_options *o)
 {
@@ -99,6 +100,9 @@ bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts
     case BSP_ACCEL_GRID:
         st = grid_build(a, err);
         break;
+    case BSP_ACCEL_BVH:
+        st = bvh_build(a, err);
+        break;
     default:
         st = error_set(err, BSP_ERR_INVALID, NULL, 0, "unknown acceleration method %d",
                        (int)a->opts.kind);
@@ -156,6 +160,10 @@ void bsp_accel_tree_stats(const bsp_accel *a, bsp_tree_stats *st)
         grid_stats(a->impl, st);
         return;
     }
+    if (a->opts.kind == BSP_ACCEL_BVH) {
+        bvh_stats(a->impl, a->scene, st);
+        return;
+    }
     kd_cost_model m;
     kd_cost_resolve(&a->opts, &m);
     kd_tree_stats(a->impl, a->scene, &m.c, st);
@@ -167,6 +175,8 @@ bsp_status bsp_accel_check(const bsp_accel *a, bsp_error *err)
         return BSP_OK;
     if (a->opts.kind == BSP_ACCEL_GRID)
         return grid_check(a->impl, a->scene, err);
+    if (a->opts.kind == BSP_ACCEL_BVH)
+        return bvh_check(a->impl, a->scene, err);
     return kd_tree_check(a->impl, a->scene, err);
 }
 
@@ -178,6 +188,8 @@ bsp_status bsp_accel_visit_cells(const bsp_accel *a, int max_depth,
         return BSP_OK;
     if (a->opts.kind == BSP_ACCEL_GRID)
         return grid_visit(a->impl, max_depth, visit, ctx);
+    if (a->opts.kind == BSP_ACCEL_BVH)
+        return bvh_visit(a->impl, max_depth, visit, ctx);
     return kd_tree_visit(a->impl, max_depth, visit, ctx, err);
 }
 

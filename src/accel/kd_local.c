@@ -8,8 +8,7 @@
 #include "accel/kd_local.h"
 #include "util/bigmem.h"
 
-/* The record of primitive P of S: its kernel's data and its index. */
-static void local_fill(kd_local *L, const bsp_scene *s, uint32_t p)
+void kd_local_fill(kd_local *L, const bsp_scene *s, uint32_t p)
 {
     const prim_record *r = &s->prims[p];
     memset(L, 0, sizeof *L);
@@ -65,7 +64,7 @@ int kd_local_build(kd_tree *t, const bsp_scene *scene)
         for (uint32_t j = n->u.first, end = j + kd_count(n); j < end; j++) {
             uint32_t p = t->prims[j];
             if (!number[p]) {
-                local_fill(&loc[nloc], scene, p);
+                kd_local_fill(&loc[nloc], scene, p);
                 number[p] = ++nloc;
             }
             lref[j] = number[p] - 1;

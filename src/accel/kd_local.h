@@ -39,6 +39,11 @@ typedef struct kd_local {
 
 _Static_assert(sizeof(kd_local) == 80, "a local record is 80 bytes");
 
+/* Fills *L with the record of primitive P of S: its kernel's data (a copy,
+ * bit for bit; a cone's pointer) and its index. Also the BVH's leaf records
+ * (bvh.h). */
+HIDDEN void kd_local_fill(kd_local *L, const bsp_scene *s, uint32_t p);
+
 /* Makes T's local copy (t->loc, t->nloc) and its leaf lists in local numbers
  * (t->lref) from T's finished tree over SCENE, replacing any earlier copy;
  * 0 when out of memory. */

@@ -627,6 +627,7 @@ int main(int argc, char **argv)
         {"grid-rec", BSP_ACCEL_GRID, BSP_OCTREE_CENTRE, 2, 0, 0},
         {"octree", BSP_ACCEL_OCTREE, BSP_OCTREE_CENTRE, 0, 0, 0},
         {"octree-cost", BSP_ACCEL_OCTREE, BSP_OCTREE_COST, 0, 0, 0},
+        {"bvh", BSP_ACCEL_BVH, BSP_OCTREE_CENTRE, 0, 0, 0},
     };
     static bsp_ray rays[NRAYS];
     static bsp_hit ref[NRAYS];

@@ -1,0 +1,93 @@
+/*
+ * bvh.h — a bounding volume hierarchy (binary, object partitioning, binned
+ * SAH), the structure most ray tracers use today, built here to compare the
+ * kd-trees with on the same kernels, rays and counters (`--accel bvh`).
+ *
+ * Layout: 32-byte nodes in one depth-first array, a node's left child right
+ * after it, its right child at `index`; a node holds its own box, in floats
+ * rounded outward. Leaves are runs of the primitives' records (kd_local.h:
+ * the kernels' data, copied bit for bit) in the order the leaves list them,
+ * so a leaf is `count` records from `index`. Every live primitive is in
+ * exactly one leaf: no mailbox is needed, and none is used.
+ *
+ * Exactness invariant: a node's box contains the bounds of every primitive
+ * below it grown by `pad` (KD_PAD_REL times the scene scale: four times the
+ * distance from its shape within which the kernels accept a hit), so every
+ * accepted hit's point lies at least 3/4 pad inside the box of every node
+ * above its primitive. The traversal's slab test (bvh_traverse.c) errs by
+ * about 1e-16 of |o| + |box| in the precision domain (scene_internal.h), far
+ * below that margin; so it never rejects a node whose primitives hold a hit
+ * in [tmin, best t], ties included, and testing every such node's leaves
+ * with tmax = best t and the lower index winning at equal t gives the naive
+ * method's answer. Rays outside the domain take the naive loop.
+ */
+#ifndef BSPRAY_ACCEL_BVH_H
+#define BSPRAY_ACCEL_BVH_H
+
+#include <stdint.h>
+
+#include "accel/kd_local.h"
+
+/* The deepest a node may lie (the traversal's stack holds one entry per
+ * level); a node at this depth becomes a leaf whatever its size. */
+#define BVH_MAX_DEPTH 60
+/* Leaves hold at most this many primitives, unless their centroids cannot
+ * be told apart or the depth limit is met. */
+#define BVH_LEAF_MAX 8
+/* Centroid bins per axis of the binned SAH. */
+#define BVH_BINS 16
+
+typedef struct bvh_node {
+    float lo[3], hi[3]; /* the box, rounded outward from the padded doubles */
+    uint32_t index;     /* interior: the right child; leaf: the first record */
+    uint32_t meta;      /* count << 2 | axis; count 0: interior, split on axis
+                           (the children's order along it) */
+} bvh_node;
+
+_Static_assert(sizeof(bvh_node) == 32, "a BVH node is 32 bytes");
+
+#define BVH_COUNT(n) ((n)->meta >> 2)
+#define BVH_AXIS(n) ((n)->meta & 3u)
+/* The most primitives one leaf may count (meta's 30 bits). */
+#define BVH_MAX_PRIMS ((uint32_t)1 << 30)
+
+typedef struct bvh {
+    bvh_node *nodes;
+    uint32_t nnodes;
+    kd_local *rec;  /* nrec records in leaf order */
+    uint32_t nrec;
+    double pad;     /* the bounds padding (KD_PAD_REL x scene scale) */
+    double ctrav;   /* the cost model of the build: C_trav, and T_i by kind */
+    bsp_sah_costs costs;
+} bvh;
+
+/* Builds A's BVH over A->scene (options A->opts): sets A's ops and impl.
+ * BSP_ERR_NOMEM or BSP_ERR_LIMIT (more than bsp_build_options.max_tree_bytes
+ * or BVH_MAX_PRIMS) with a message in ERR. */
+HIDDEN bsp_status bvh_build(bsp_accel *a, bsp_error *err);
+
+/* Havran's figures of the BVH (bsp_tree_stats; empty_leaves 0, references the
+ * live primitives, expected_cost and model_cost by surface area over the
+ * root's box, interior nodes at C_trav). */
+HIDDEN void bvh_stats(const bvh *b, const bsp_scene *scene, bsp_tree_stats *st);
+
+/* The invariants: child indices in range and depth within BVH_MAX_DEPTH,
+ * every live primitive in exactly one leaf with its record the scene's data
+ * bit for bit, and its padded bounds inside the box of its leaf and of
+ * every node above it. BSP_OK or BSP_ERR_INVALID with the first violation. */
+HIDDEN bsp_status bvh_check(const bvh *b, const bsp_scene *scene, bsp_error *err);
+
+/* bsp_accel_visit_cells for a BVH: each node's box, depth first; an interior
+ * node's axis is the one its children are ordered on and its "split" the
+ * low face of its right child's box on that axis (the boxes may overlap). */
+HIDDEN bsp_status bvh_visit(const bvh *b, int max_depth,
+                            int (*visit)(const bsp_cell_info *cell, void *ctx), void *ctx);
+
+/* The queries (bvh_traverse.c). */
+HIDDEN int bvh_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
+                         bsp_hit *hit);
+HIDDEN int bvh_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from);
+
+HIDDEN void bvh_destroy(void *impl);
+
+#endif /* BSPRAY_ACCEL_BVH_H */

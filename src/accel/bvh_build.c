@@ -1,0 +1,267 @@
+/*
+ * bvh_build.c — the BVH's top-down build by the binned surface area
+ * heuristic (Wald, "On fast construction of SAH-based bounding volume
+ * hierarchies", 2007): at each node the primitives' centroids are put in
+ * BVH_BINS bins along each axis, the SAH cost
+ *     C_trav + (A_L / A) sum_{i in L} T_i + (A_R / A) sum_{i in R} T_i
+ * (A the surface area of a box, T_i the kd-trees' per-kind intersection
+ * costs, bsp_build_options.sah_costs) is evaluated between every two bins,
+ * and the cheapest split is taken when it beats the leaf's cost sum_i T_i or
+ * the node holds more than BVH_LEAF_MAX primitives. Centroids that all
+ * coincide are halved in index order. One thread; O(N log N) for a tree of
+ * logarithmic depth. Layout and exactness: bvh.h.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "accel/bvh.h"
+#include "accel/kd_cost.h"
+#include "geom/vec.h"
+#include "util/bigmem.h"
+
+typedef struct builder {
+    const bsp_box *bounds; /* per primitive: its bounds grown by pad */
+    const double *cost;    /* per primitive: T_i */
+    uint32_t *order;       /* the live primitives, partitioned as the build goes */
+    bvh_node *nodes;
+    uint32_t nnodes;
+    double ctrav;
+} builder;
+
+/* X rounded to a float towards -inf / +inf: the float box contains the
+ * double one. */
+static float float_down(double x)
+{
+    float f = (float)x;
+    return (double)f > x ? nextafterf(f, -INFINITY) : f;
+}
+static float float_up(double x)
+{
+    float f = (float)x;
+    return (double)f < x ? nextafterf(f, INFINITY) : f;
+}
+
+static double centroid(const bsp_box *b, unsigned k)
+{
+    return 0.5 * (b->lo.v[k] + b->hi.v[k]);
+}
+
+/* The bin of centroid C on an axis whose centroids span [LO, LO + extent),
+ * SCALE = BVH_BINS / extent: the same function bins and partitions. */
+static int bin_of(double c, double lo, double scale)
+{
+    int i = (int)((c - lo) * scale);
+    return i < 0 ? 0 : i >= BVH_BINS ? BVH_BINS - 1 : i;
+}
+
+typedef struct split_choice {
+    unsigned axis;
+    int last_left; /* the last bin on the left side */
+    double lo, scale;
+} split_choice;
+
+/* The cheapest binned split of ORDER[begin, end) (box BOX, centroids in
+ * CBOX, cost sum TSUM): 1 and *OUT when it is to be made (it beats the leaf,
+ * or the node is too large for one), else 0. */
+static int choose_split(const builder *b, uint32_t begin, uint32_t end, const bsp_box *box,
+                        const bsp_box *cbox, double tsum, split_choice *out)
+{
+    const uint32_t n = end - begin;
+    const double inv_area = 1.0 / kd_surface_area(box);
+    double best = INFINITY;
+    for (unsigned k = 0; k < 3; k++) {
+        double extent = cbox->hi.v[k] - cbox->lo.v[k];
+        if (!(extent > 0.0))
+            continue;
+        double scale = BVH_BINS / extent;
+        bsp_box bin_box[BVH_BINS];
+        double bin_cost[BVH_BINS];
+        uint32_t bin_n[BVH_BINS];
+        for (int i = 0; i < BVH_BINS; i++) {
+            bin_box[i] = box_empty();
+            bin_cost[i] = 0.0;
+            bin_n[i] = 0;
+        }
+        for (uint32_t j = begin; j < end; j++) {
+            uint32_t p = b->order[j];
+            int i = bin_of(centroid(&b->bounds[p], k), cbox->lo.v[k], scale);
+            bin_box[i] = box_union(bin_box[i], b->bounds[p]);
+            bin_cost[i] += b->cost[p];
+            bin_n[i]++;
+        }
+        /* right side's area x cost for the splits after bins 0 .. BINS-2 */
+        double right[BVH_BINS];
+        bsp_box acc = box_empty();
+        double csum = 0.0;
+        uint32_t nsum = 0;
+        for (int i = BVH_BINS - 1; i > 0; i--) {
+            acc = box_union(acc, bin_box[i]);
+            csum += bin_cost[i];
+            nsum += bin_n[i];
+            right[i - 1] = nsum ? kd_surface_area(&acc) * csum : -1.0;
+        }
+        acc = box_empty();
+        csum = 0.0;
+        nsum = 0;
+        for (int i = 0; i < BVH_BINS - 1; i++) {
+            acc = box_union(acc, bin_box[i]);
+            csum += bin_cost[i];
+            nsum += bin_n[i];
+            if (!nsum || right[i] < 0.0)
+                continue; /* a side would be empty */
+            double c = b->ctrav + (kd_surface_area(&acc) * csum + right[i]) * inv_area;
+            if (c < best) {
+                best = c;
+                out->axis = k;
+                out->last_left = i;
+                out->lo = cbox->lo.v[k];
+                out->scale = scale;
+            }
+        }
+    }
+    if (best == INFINITY) /* every centroid the same: halve by index when too many */
+        return n > BVH_LEAF_MAX ? (out->axis = 0, out->last_left = -1, 1) : 0;
+    return best < tsum || n > BVH_LEAF_MAX;
+}
+
+/* Partitions ORDER[begin, end) by C: the left side first; returns where the
+ * right side starts (the middle when C halves by index). */
+static uint32_t partition(builder *b, uint32_t begin, uint32_t end, const split_choice *c)
+{
+    if (c->last_left < 0)
+        return begin + (end - begin) / 2;
+    uint32_t i = begin, j = end;
+    while (i < j) {
+        uint32_t p = b->order[i];
+        if (bin_of(centroid(&b->bounds[p], c->axis), c->lo, c->scale) <= c->last_left) {
+            i++;
+        } else {
+            b->order[i] = b->order[--j];
+            b->order[j] = p;
+        }
+    }
+    return i;
+}
+
+/* Builds the subtree of ORDER[begin, end) (not empty) at DEPTH as node
+ * b->nnodes and those after it. Never runs out of room: a tree of n
+ * non-empty leaves has 2n - 1 nodes, and b->nodes holds that many. */
+static void build_node(builder *b, uint32_t begin, uint32_t end, int depth)
+{
+    uint32_t me = b->nnodes++;
+    bsp_box box = box_empty(), cbox = box_empty();
+    double tsum = 0.0;
+    for (uint32_t j = begin; j < end; j++) {
+        const bsp_box *pb = &b->bounds[b->order[j]];
+        box = box_union(box, *pb);
+        for (unsigned k = 0; k < 3; k++) {
+            double c = centroid(pb, k);
+            cbox.lo.v[k] = c < cbox.lo.v[k] ? c : cbox.lo.v[k];
+            cbox.hi.v[k] = c > cbox.hi.v[k] ? c : cbox.hi.v[k];
+        }
+        tsum += b->cost[b->order[j]];
+    }
+    bvh_node *node = &b->nodes[me];
+    for (unsigned k = 0; k < 3; k++) {
+        node->lo[k] = float_down(box.lo.v[k]);
+        node->hi[k] = float_up(box.hi.v[k]);
+    }
+    split_choice c = {0, -1, 0.0, 0.0};
+    if (depth >= BVH_MAX_DEPTH || !choose_split(b, begin, end, &box, &cbox, tsum, &c)) {
+        node->index = begin;
+        node->meta = (end - begin) << 2;
+        return;
+    }
+    uint32_t mid = partition(b, begin, end, &c);
+    build_node(b, begin, mid, depth + 1); /* at me + 1 */
+    uint32_t right = b->nnodes;
+    build_node(b, mid, end, depth + 1);
+    node = &b->nodes[me];
+    node->index = right;
+    node->meta = c.axis;
+}
+
+void bvh_destroy(void *impl)
+{
+    bvh *t = impl;
+    if (!t)
+        return;
+    free(t->nodes);
+    free(t->rec);
+    free(t);
+}
+
+static const accel_ops bvh_ops = {bvh_intersect, bvh_occluded, bvh_destroy};
+
+static bsp_status bvh_oom(bsp_error *err)
+{
+    return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the BVH");
+}
+
+bsp_status bvh_build(bsp_accel *a, bsp_error *err)
+{
+    const bsp_scene *s = a->scene;
+    const size_t np = s->nprims;
+    size_t n = 0;
+    for (size_t p = 0; p < np; p++)
+        n += s->prims[p].shape != SHAPE_NONE;
+    if (n >= BVH_MAX_PRIMS)
+        return error_set(err, BSP_ERR_LIMIT, NULL, 0,
+                         "a BVH holds at most %u primitives, the scene has %zu",
+                         (unsigned)BVH_MAX_PRIMS - 1, n);
+    const size_t nodes_cap = n ? 2 * n - 1 : 0;
+    const size_t bytes = nodes_cap * sizeof(bvh_node) + n * sizeof(kd_local);
+    const size_t limit = accel_max_bytes(&a->opts);
+    if (limit && bytes > limit)
+        return error_set(err, BSP_ERR_LIMIT, NULL, 0,
+                         "the BVH would take %zu bytes, over the limit of %zu", bytes, limit);
+    kd_cost_model cm;
+    kd_cost_resolve(&a->opts, &cm);
+    bvh *t = calloc(1, sizeof *t);
+    if (!t)
+        return bvh_oom(err);
+    t->pad = KD_PAD_REL * scene_scale(s);
+    t->ctrav = cm.c.traversal;
+    t->costs = cm.c;
+    builder b = {0};
+    b.ctrav = cm.c.traversal;
+    bsp_box *bounds = bigmem_malloc((np ? np : 1) * sizeof *bounds);
+    double *cost = bigmem_malloc((np ? np : 1) * sizeof *cost);
+    b.order = malloc((n ? n : 1) * sizeof *b.order);
+    t->nodes = bigmem_malloc((nodes_cap ? nodes_cap : 1) * sizeof *t->nodes);
+    t->rec = bigmem_malloc((n ? n : 1) * sizeof *t->rec);
+    bsp_status st = BSP_OK;
+    if (!bounds || !cost || !b.order || !t->nodes || !t->rec) {
+        st = bvh_oom(err);
+        goto done;
+    }
+    uint32_t live = 0;
+    for (uint32_t p = 0; p < (uint32_t)np; p++) {
+        if (s->prims[p].shape == SHAPE_NONE)
+            continue;
+        bounds[p] = box_grow(bsp_scene_prim_bounds(s, p), t->pad);
+        cost[p] = kd_prim_cost(s, p, &cm.c);
+        b.order[live++] = p;
+    }
+    b.bounds = bounds;
+    b.cost = cost;
+    b.nodes = t->nodes;
+    if (n)
+        build_node(&b, 0, (uint32_t)n, 0);
+    t->nnodes = b.nnodes;
+    for (uint32_t i = 0; i < (uint32_t)n; i++)
+        kd_local_fill(&t->rec[i], s, b.order[i]);
+    t->nrec = (uint32_t)n;
+done:
+    free(bounds);
+    free(cost);
+    free(b.order);
+    if (st != BSP_OK) {
+        bvh_destroy(t);
+        return st;
+    }
+    a->ops = &bvh_ops;
+    a->impl = t;
+    return BSP_OK;
+}
