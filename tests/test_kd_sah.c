@@ -1029,6 +1029,11 @@ TEST(sah_exact_stress_non_planar_polygons)
         add_sphere(s, bsp_v3(rnd_in(-20, 20), rnd_in(-20, 20), rnd_in(-20, 20)), rnd_in(0.2, 1.5));
     REQUIRE(bsp_scene_kind_count(s, BSP_PRIM_DROPPED) == 0);
     check_exact(s, "non-planar polygons", 407);
+    /* the BVH's boxes hold the hits off the polygons' planes too */
+    bsp_build_options bvh;
+    bsp_build_options_defaults(&bvh);
+    bvh.kind = BSP_ACCEL_BVH;
+    check_exact_opts(s, "non-planar polygons, bvh", bvh, ray_count(20000), 408);
     bsp_scene_destroy(s);
 }
 
@@ -1348,7 +1353,8 @@ TEST(sah_clip_cones_is_conservative_and_tight)
  * median of a symmetric scene splits at exactly 0 (and SAH trees get the
  * same rays); every answer must be the naive one. (Without the fallback
  * these rays happened to agree too: an infinite exit t only makes the
- * traversal stop at the first hit it finds, which here was the closest.) */
+ * traversal stop at the first hit it finds, which here was the closest.)
+ * The BVH gets them too: its slab tests take the infinite 1 / d as it is. */
 TEST(kd_exact_subnormal_directions)
 {
     bsp_scene *s = bsp_scene_create();
@@ -1359,17 +1365,19 @@ TEST(kd_exact_subnormal_directions)
         add_sphere(s, v3_scale(c, -1.0), rnd_in(0.05, 0.6)); /* symmetric bounds */
     }
     add_tri(s, bsp_v3(0, -3, -3), bsp_v3(0, 3, -3), bsp_v3(0, 0, 3)); /* in the plane x = 0 */
-    bsp_build_options kinds[2];
+    bsp_build_options kinds[3];
     bsp_build_options_defaults(&kinds[0]);
     kinds[0].kind = BSP_ACCEL_KAPLAN;
     kinds[1] = sah_options();
+    bsp_build_options_defaults(&kinds[2]);
+    kinds[2].kind = BSP_ACCEL_BVH; /* 1 / d infinite in its slab tests */
     bsp_build_options nv;
     bsp_build_options_defaults(&nv);
     nv.kind = BSP_ACCEL_NAIVE;
     bsp_accel *naive = build(s, &nv);
     bsp_query *qn = bsp_query_create(naive);
     int mismatches = 0, hits = 0;
-    for (int kd = 0; kd < 2; kd++) {
+    for (int kd = 0; kd < 3; kd++) {
         bsp_accel *acc = build(s, &kinds[kd]);
         bsp_query *q = bsp_query_create(acc);
         for (int i = 0; i < 20000; i++) {
@@ -1394,7 +1402,7 @@ TEST(kd_exact_subnormal_directions)
         bsp_query_destroy(q);
         bsp_accel_destroy(acc);
     }
-    CHECK_MSG(mismatches == 0, "%d of 40000 rays differ from naive", mismatches);
+    CHECK_MSG(mismatches == 0, "%d of 60000 rays differ from naive", mismatches);
     CHECK(hits > 1000);
     bsp_query_destroy(qn);
     bsp_accel_destroy(naive);
