@@ -18,6 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "accel/bvh.h"
 #include "accel/grid.h"
 #include "accel/kd_tree.h"
 #include "bspray/bspray.h"
@@ -56,6 +57,17 @@ static void collect_planes(const bsp_accel *a, plane_list *pl, int limit)
                     pl->value[pl->n] = grid_plane(&g->subs[s], k, i);
                     pl->n++;
                 }
+        return;
+    }
+    if (bsp_accel_get_kind(a) == BSP_ACCEL_BVH) {
+        const bvh *b = a->impl; /* its boxes' faces */
+        for (uint32_t i = 0; i < b->nnodes && pl->n + 6 <= limit; i++)
+            for (unsigned k = 0; k < 3; k++) {
+                pl->axis[pl->n] = k;
+                pl->value[pl->n++] = b->nodes[i].lo[k];
+                pl->axis[pl->n] = k;
+                pl->value[pl->n++] = b->nodes[i].hi[k];
+            }
         return;
     }
     const kd_tree *t = a->impl;
@@ -224,18 +236,19 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
         g.box.lo = bsp_v3(-1, -1, -1);
         g.box.hi = bsp_v3(1, 1, 1);
     }
-    /* the planes of the last adaptive kd-tree, then of the grid and of the
-     * octree (their last variants) */
+    /* the planes of the last adaptive kd-tree, then of the grid, of the
+     * octree (their last variants) and the BVH's box faces */
     for (int v = nv - 1; v >= 0; v--)
         if (bsp_accel_get_kind(acc[v]) < BSP_ACCEL_GRID) {
             collect_planes(acc[v], &g.planes, 2048);
             break;
         }
-    static const bsp_accel_kind regular[] = {BSP_ACCEL_GRID, BSP_ACCEL_OCTREE};
-    for (int k = 0; k < 2; k++)
+    static const bsp_accel_kind regular[] = {BSP_ACCEL_GRID, BSP_ACCEL_OCTREE, BSP_ACCEL_BVH};
+    static const int upto[] = {3072, 3584, 4096};
+    for (int k = 0; k < 3; k++)
         for (int v = nv - 1; v >= 0; v--)
             if (bsp_accel_get_kind(acc[v]) == regular[k]) {
-                collect_planes(acc[v], &g.planes, k == 0 ? 3072 : 4096);
+                collect_planes(acc[v], &g.planes, upto[k]);
                 break;
             }
     rng = seed;

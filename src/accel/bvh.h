@@ -3,12 +3,15 @@
  * SAH), the structure most ray tracers use today, built here to compare the
  * kd-trees with on the same kernels, rays and counters (`--accel bvh`).
  *
- * Layout: 32-byte nodes in one depth-first array, a node's left child right
- * after it, its right child at `index`; a node holds its own box, in floats
- * rounded outward. Leaves are runs of the primitives' records (kd_local.h:
- * the kernels' data, copied bit for bit) in the order the leaves list them,
- * so a leaf is `count` records from `index`. Every live primitive is in
- * exactly one leaf: no mailbox is needed, and none is used.
+ * Layout: 32-byte nodes, each holding its own box in floats rounded
+ * outward. The root is node 0 (node 1 is unused); every other node lies
+ * beside its sibling, the pair at an even index, left then right, so that
+ * the two boxes a traversal tests together share one 64-byte line (the array
+ * is 64-byte aligned). An interior node's `index` is its pair's. Leaves are
+ * runs of the primitives' records (kd_local.h: the kernels' data, copied bit
+ * for bit) in the order the leaves list them, so a leaf is `count` records
+ * from `index`. Every live primitive is in exactly one leaf: no mailbox is
+ * needed, and none is used.
  *
  * Exactness invariant: a node's box contains the bounds of every primitive
  * below it grown by `pad` (KD_PAD_REL times the scene scale: four times the
@@ -39,9 +42,8 @@
 
 typedef struct bvh_node {
     float lo[3], hi[3]; /* the box, rounded outward from the padded doubles */
-    uint32_t index;     /* interior: the right child; leaf: the first record */
-    uint32_t meta;      /* count << 2 | axis; count 0: interior, split on axis
-                           (the children's order along it) */
+    uint32_t index;     /* interior: its children's pair; leaf: the first record */
+    uint32_t meta;      /* count << 2 | axis; count 0: interior, split on axis */
 } bvh_node;
 
 _Static_assert(sizeof(bvh_node) == 32, "a BVH node is 32 bytes");
@@ -52,8 +54,9 @@ _Static_assert(sizeof(bvh_node) == 32, "a BVH node is 32 bytes");
 #define BVH_MAX_PRIMS ((uint32_t)1 << 30)
 
 typedef struct bvh {
-    bvh_node *nodes;
-    uint32_t nnodes;
+    bvh_node *nodes; /* 64-byte aligned, inside nodes_block */
+    void *nodes_block;
+    uint32_t nnodes; /* 0: no live primitive; else 2 + 2 x (interior nodes) */
     kd_local *rec;  /* nrec records in leaf order */
     uint32_t nrec;
     double pad;     /* the bounds padding (KD_PAD_REL x scene scale) */
@@ -78,8 +81,8 @@ HIDDEN void bvh_stats(const bvh *b, const bsp_scene *scene, bsp_tree_stats *st);
 HIDDEN bsp_status bvh_check(const bvh *b, const bsp_scene *scene, bsp_error *err);
 
 /* bsp_accel_visit_cells for a BVH: each node's box, depth first; an interior
- * node's axis is the one its children are ordered on and its "split" the
- * low face of its right child's box on that axis (the boxes may overlap). */
+ * node's axis is the one its primitives were partitioned on and its "split"
+ * the low face of its right child's box on that axis (the boxes may overlap). */
 HIDDEN bsp_status bvh_visit(const bvh *b, int max_depth,
                             int (*visit)(const bsp_cell_info *cell, void *ctx), void *ctx);
 

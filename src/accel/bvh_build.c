@@ -12,6 +12,7 @@
  * logarithmic depth. Layout and exactness: bvh.h.
  */
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -144,12 +145,11 @@ static uint32_t partition(builder *b, uint32_t begin, uint32_t end, const split_
     return i;
 }
 
-/* Builds the subtree of ORDER[begin, end) (not empty) at DEPTH as node
- * b->nnodes and those after it. Never runs out of room: a tree of n
- * non-empty leaves has 2n - 1 nodes, and b->nodes holds that many. */
-static void build_node(builder *b, uint32_t begin, uint32_t end, int depth)
+/* Builds the subtree of ORDER[begin, end) (not empty) at DEPTH in node ME,
+ * its children's pairs from b->nnodes on. Never runs out of room: a tree of
+ * n non-empty leaves has n - 1 pairs, and b->nodes holds 2 + 2 (n - 1). */
+static void build_node(builder *b, uint32_t me, uint32_t begin, uint32_t end, int depth)
 {
-    uint32_t me = b->nnodes++;
     bsp_box box = box_empty(), cbox = box_empty();
     double tsum = 0.0;
     for (uint32_t j = begin; j < end; j++) {
@@ -174,12 +174,12 @@ static void build_node(builder *b, uint32_t begin, uint32_t end, int depth)
         return;
     }
     uint32_t mid = partition(b, begin, end, &c);
-    build_node(b, begin, mid, depth + 1); /* at me + 1 */
-    uint32_t right = b->nnodes;
-    build_node(b, mid, end, depth + 1);
-    node = &b->nodes[me];
-    node->index = right;
+    uint32_t pair = b->nnodes;
+    b->nnodes += 2;
+    node->index = pair;
     node->meta = c.axis;
+    build_node(b, pair, begin, mid, depth + 1);
+    build_node(b, pair + 1, mid, end, depth + 1);
 }
 
 void bvh_destroy(void *impl)
@@ -187,7 +187,7 @@ void bvh_destroy(void *impl)
     bvh *t = impl;
     if (!t)
         return;
-    free(t->nodes);
+    free(t->nodes_block);
     free(t->rec);
     free(t);
 }
@@ -210,7 +210,7 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
         return error_set(err, BSP_ERR_LIMIT, NULL, 0,
                          "a BVH holds at most %u primitives, the scene has %zu",
                          (unsigned)BVH_MAX_PRIMS - 1, n);
-    const size_t nodes_cap = n ? 2 * n - 1 : 0;
+    const size_t nodes_cap = n ? 2 * n : 0; /* the root, an unused slot, n - 1 pairs */
     const size_t bytes = nodes_cap * sizeof(bvh_node) + n * sizeof(kd_local);
     const size_t limit = accel_max_bytes(&a->opts);
     if (limit && bytes > limit)
@@ -229,7 +229,10 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
     bsp_box *bounds = bigmem_malloc((np ? np : 1) * sizeof *bounds);
     double *cost = bigmem_malloc((np ? np : 1) * sizeof *cost);
     b.order = malloc((n ? n : 1) * sizeof *b.order);
-    t->nodes = bigmem_malloc((nodes_cap ? nodes_cap : 1) * sizeof *t->nodes);
+    /* 63 bytes more, to start the array on a line */
+    t->nodes_block = bigmem_malloc((nodes_cap ? nodes_cap : 1) * sizeof *t->nodes + 63);
+    if (t->nodes_block)
+        t->nodes = (bvh_node *)(((uintptr_t)t->nodes_block + 63) & ~(uintptr_t)63);
     t->rec = bigmem_malloc((n ? n : 1) * sizeof *t->rec);
     bsp_status st = BSP_OK;
     if (!bounds || !cost || !b.order || !t->nodes || !t->rec) {
@@ -247,8 +250,11 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
     b.bounds = bounds;
     b.cost = cost;
     b.nodes = t->nodes;
-    if (n)
-        build_node(&b, 0, (uint32_t)n, 0);
+    if (n) {
+        memset(&t->nodes[1], 0, sizeof t->nodes[1]); /* unused: keeps the pairs on lines */
+        b.nnodes = 2;
+        build_node(&b, 0, 0, (uint32_t)n, 0);
+    }
     t->nnodes = b.nnodes;
     for (uint32_t i = 0; i < (uint32_t)n; i++)
         kd_local_fill(&t->rec[i], s, b.order[i]);

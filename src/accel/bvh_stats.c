@@ -30,8 +30,8 @@ typedef struct node_at {
 /* Pushes the children of interior node AT (N), the left one on top. */
 static void push_children(node_at *stack, unsigned *sp, const bvh_node *n, node_at at)
 {
+    stack[(*sp)++] = (node_at){n->index + 1, at.depth + 1};
     stack[(*sp)++] = (node_at){n->index, at.depth + 1};
-    stack[(*sp)++] = (node_at){at.i + 1, at.depth + 1};
 }
 
 void bvh_stats(const bvh *b, const bsp_scene *scene, bsp_tree_stats *st)
@@ -78,7 +78,7 @@ void bvh_stats(const bvh *b, const bsp_scene *scene, bsp_tree_stats *st)
     for (uint32_t i = 0; i < b->nnodes; i++) {
         const bvh_node *n = &b->nodes[i];
         uint32_t w[8];
-        memcpy(w, n, sizeof w);
+        memcpy(w, n, sizeof w); /* the unused slot is zeroed */
         for (int k = 0; k < 8; k++)
             h = fnv1a_u32(h, w[k]);
     }
@@ -123,11 +123,12 @@ bsp_status bvh_check(const bvh *b, const bsp_scene *scene, bsp_error *err)
         path[at.depth] = node_box(n);
         uint32_t cnt = BVH_COUNT(n);
         if (!cnt) {
-            if (at.depth >= BVH_MAX_DEPTH || n->index <= at.i + 1 || n->index >= b->nnodes ||
-                at.i + 1 >= b->nnodes || BVH_AXIS(n) > 2) {
+            /* pairs at even indices after the node: each reached once, no cycle */
+            if (at.depth >= BVH_MAX_DEPTH || n->index % 2 || n->index <= at.i ||
+                n->index + 1 >= b->nnodes || BVH_AXIS(n) > 2) {
                 st = error_set(err, BSP_ERR_INVALID, NULL, 0,
                                "BVH node %u: children %u and %u of %u nodes, depth %d", at.i,
-                               at.i + 1, n->index, b->nnodes, at.depth);
+                               n->index, n->index + 1, b->nnodes, at.depth);
                 break;
             }
             push_children(stack, &sp, n, at);
@@ -168,7 +169,8 @@ bsp_status bvh_check(const bvh *b, const bsp_scene *scene, bsp_error *err)
                 }
         }
     }
-    if (st == BSP_OK && (next_rec != b->nrec || visited != b->nnodes))
+    /* every node but the unused slot 1 */
+    if (st == BSP_OK && (next_rec != b->nrec || visited + 1 != b->nnodes))
         st = error_set(err, BSP_ERR_INVALID, NULL, 0,
                        "BVH: %u of %u records and %u of %u nodes reached", next_rec, b->nrec,
                        visited, b->nnodes);
@@ -197,15 +199,14 @@ bsp_status bvh_visit(const bvh *b, int max_depth,
             c.refs = cnt;
         } else {
             c.axis = BVH_AXIS(n);
-            c.split = b->nodes[n->index].lo[c.axis];
+            c.split = b->nodes[n->index + 1].lo[c.axis];
             /* the references below: the records from the leftmost leaf's
              * first to the rightmost leaf's last, in record order */
             const bvh_node *l = n, *r = n;
-            uint32_t li = at.i;
             while (!BVH_COUNT(l))
-                l = &b->nodes[++li];
+                l = &b->nodes[l->index];
             while (!BVH_COUNT(r))
-                r = &b->nodes[r->index];
+                r = &b->nodes[r->index + 1];
             c.refs = (uint64_t)r->index + BVH_COUNT(r) - l->index;
         }
         int go = visit(&c, ctx);

@@ -1,16 +1,20 @@
 /*
- * bvh_traverse.c — closest-hit and any-hit queries on the BVH (bvh.h):
- * depth first, the child on the ray's side of the node's axis first, the
- * other on a stack; a node is entered when the ray's interval [tmin, best t]
- * meets its box (slab test on the reciprocal direction), and popped nodes
- * are tested again against the best t found since they were pushed.
+ * bvh_traverse.c — closest-hit and any-hit queries on the BVH (bvh.h).
+ * At an interior node both children's boxes (one cache line) are tested
+ * against the ray's interval [tmin, best t] (slab tests on the reciprocal
+ * direction); a leaf that is met is tested at once, the nearer first, and of
+ * two interior children met the nearer is entered and the other pushed with
+ * its entry t. A popped node is skipped when that entry lies beyond the best
+ * t found since: the entry computed is at most the t of any hit in its
+ * subtree (bvh.h: hits lie 3/4 pad inside every box above them, and the slab
+ * arithmetic errs far less), so the skip loses no hit, ties included.
  *
  * Slabs of zero direction components: 1 / d is +-inf, so (lo - o) / d is
  * -inf or +inf, the whole line, when o lies strictly inside the slab, and
  * an empty interval when outside; NaN only when o lies exactly on a face,
- * where no accepted hit of the node can lie (bvh.h: hits lie 3/4 pad inside)
- * and either answer is safe. The min and max below are written as compares
- * so that a NaN cannot make a loop run on: every path ends.
+ * where no accepted hit of the node can lie and either answer is safe. The
+ * min and max below are written as compares so that a NaN cannot make a
+ * loop run on: every path ends.
  *
  * Counters: N_TS counts the node boxes tested, N_ETS / leaves the leaves
  * entered (none is empty), N_IT the primitives tested; the mailbox counts
@@ -22,7 +26,6 @@
 
 typedef struct bvh_ray {
     double o[3], inv[3];
-    unsigned neg[3]; /* direction component negative: the right child first */
 } bvh_ray;
 
 static inline double min2(double a, double b)
@@ -35,8 +38,9 @@ static inline double max2(double a, double b)
 }
 
 /* Whether R's interval [T0, T1] meets the box of N (see above for zero
- * direction components). */
-static inline int box_hit(const bvh_node *n, const bvh_ray *r, double t0, double t1)
+ * direction components); *ENTRY is where it enters. */
+static inline int box_hit(const bvh_node *n, const bvh_ray *r, double t0, double t1,
+                          double *entry)
 {
     for (unsigned k = 0; k < 3; k++) {
         double a = ((double)n->lo[k] - r->o[k]) * r->inv[k];
@@ -44,6 +48,7 @@ static inline int box_hit(const bvh_node *n, const bvh_ray *r, double t0, double
         t0 = max2(t0, min2(a, b));
         t1 = min2(t1, max2(a, b));
     }
+    *entry = t0;
     return t0 <= t1;
 }
 
@@ -52,7 +57,6 @@ static inline void bvh_ray_init(bvh_ray *r, const bsp_ray *ray)
     for (unsigned k = 0; k < 3; k++) {
         r->o[k] = ray->org.v[k];
         r->inv[k] = 1.0 / ray->dir.v[k];
-        r->neg[k] = signbit(ray->dir.v[k]) != 0;
     }
 }
 
@@ -63,50 +67,113 @@ static inline int bvh_in_domain(const bsp_scene *s, const bsp_ray *ray)
     return scene_ray_in_domain(s, ray->org.v, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
 }
 
-/* The near child of interior node I (N) for R, and the far one in *FAR. */
-static inline uint32_t near_child(const bvh_node *n, uint32_t i, const bvh_ray *r,
-                                  uint32_t *far)
-{
-    if (r->neg[BVH_AXIS(n)]) {
-        *far = i + 1;
-        return n->index;
-    }
-    *far = n->index;
-    return i + 1;
-}
-
-/* A depth-first walk: the node to look at next (UINT32_MAX: pop one), the
- * far children still to look at, and the count of boxes tested. */
+/* A walk of the tree: the nodes still to visit, each with its entry t, and
+ * the count of boxes tested. */
 typedef struct bvh_walk {
-    uint32_t next;
     unsigned sp;
     uint64_t tested;
-    uint32_t stack[BVH_MAX_DEPTH + 2]; /* one far child per level at most */
+    uint32_t node[BVH_MAX_DEPTH + 2]; /* one pushed child per level at most */
+    double entry[BVH_MAX_DEPTH + 2];
 } bvh_walk;
 
-/* The next leaf of T whose box R's interval [T0, T1] meets, or NULL when the
- * walk is over. Popped nodes are tested with the T1 of now, the best hit's. */
-static inline const bvh_node *next_leaf(const bvh *t, const bvh_ray *r, double t0, double t1,
-                                        bvh_walk *w)
+/* One query's leaf step: tests the records of leaf N against the ray and
+ * says whether the query is over (an any-hit query found one). */
+typedef int (*leaf_fn)(void *ctx, const bvh_node *n);
+
+/* The walk of T for R over [TMIN, *TMAX] (*TMAX may shrink as LEAF finds
+ * hits), calling LEAF for every leaf whose box the interval meets, nearer
+ * siblings first; returns 1 when LEAF ended it. Inlined into both queries,
+ * so LEAF is a direct call. */
+static inline __attribute__((always_inline)) int
+walk(const bvh *t, const bvh_ray *r, double tmin, const double *tmax, bvh_walk *w, leaf_fn leaf,
+     void *ctx)
 {
+    double e0;
+    const bvh_node *nodes = t->nodes;
+    w->tested++;
+    if (!box_hit(&nodes[0], r, tmin, *tmax, &e0))
+        return 0;
+    if (BVH_COUNT(&nodes[0]))
+        return leaf(ctx, &nodes[0]);
+    uint32_t pair = nodes[0].index;
     for (;;) {
-        if (w->next == UINT32_MAX) {
-            if (!w->sp)
-                return NULL;
-            w->next = w->stack[--w->sp];
+        const bvh_node *c = &nodes[pair];
+        double e[2];
+        int hit0 = box_hit(&c[0], r, tmin, *tmax, &e[0]);
+        int hit1 = box_hit(&c[1], r, tmin, *tmax, &e[1]);
+        w->tested += 2;
+        unsigned near = hit1 && (!hit0 || e[1] < e[0]), far = !near;
+        int hit_far = near ? hit0 : hit1;
+        int go = -1; /* the child to enter */
+        if (hit0 | hit1) {
+            if (!BVH_COUNT(&c[near]))
+                go = (int)near;
+            else if (leaf(ctx, &c[near]))
+                return 1;
         }
-        uint32_t i = w->next;
-        const bvh_node *n = &t->nodes[i];
-        w->tested++;
-        w->next = UINT32_MAX;
-        if (!box_hit(n, r, t0, t1))
+        if (hit_far && e[far] <= *tmax) { /* not beyond a hit the near leaf found */
+            if (go >= 0) {
+                w->node[w->sp] = pair + far;
+                w->entry[w->sp++] = e[far];
+            } else if (!BVH_COUNT(&c[far])) {
+                go = (int)far;
+            } else if (leaf(ctx, &c[far])) {
+                return 1;
+            }
+        }
+        if (go >= 0) {
+            pair = c[go].index;
             continue;
-        if (BVH_COUNT(n))
-            return n;
-        uint32_t far;
-        w->next = near_child(n, i, r, &far);
-        w->stack[w->sp++] = far;
+        }
+        for (;;) { /* the next node pushed still nearer than the best hit */
+            if (!w->sp)
+                return 0;
+            w->sp--;
+            if (w->entry[w->sp] > *tmax)
+                continue;
+            const bvh_node *n = &nodes[w->node[w->sp]];
+            if (!BVH_COUNT(n)) {
+                pair = n->index;
+                break;
+            }
+            if (leaf(ctx, n))
+                return 1;
+        }
     }
+}
+
+/* The closest-hit query's state, for its leaf step. */
+typedef struct closest {
+    const bsp_scene *s;
+    const kd_local *rec;
+    isect_ray r;
+    uint32_t from, best_p;
+    double tmax; /* follows the best hit; t never depends on it */
+    scene_isect_hit best;
+    uint64_t leaves, refs, tests;
+} closest;
+
+static inline __attribute__((always_inline)) int closest_leaf(void *ctx, const bvh_node *n)
+{
+    closest *c = ctx;
+    uint32_t cnt = BVH_COUNT(n);
+    scene_isect_hit h;
+    c->leaves++;
+    c->refs += cnt;
+    for (const kd_local *L = c->rec + n->index, *end = L + cnt; L != end; L++) {
+        if (L->prim == c->from)
+            continue;
+        c->tests++;
+        /* every hit found is at most tmax: better when its t is smaller or,
+         * at equal t, its index lower (the naive order) */
+        if (kd_local_isect(c->s, L, &c->r, c->tmax, &h) &&
+            (h.t < c->best.t || L->prim < c->best_p)) {
+            c->best = h;
+            c->best_p = L->prim;
+            c->tmax = h.t;
+        }
+    }
+    return 0;
 }
 
 int bvh_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
@@ -121,39 +188,47 @@ int bvh_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t
         return 0;
     bvh_ray br;
     bvh_ray_init(&br, ray);
-    isect_ray r;
-    isect_ray_init(&r, ray, s->hit_tol); /* in the domain: checked */
-    const double tmin = ray->tmin;
-    double tmax = ray->tmax; /* follows the best hit; t never depends on it */
-    scene_isect_hit best = {INFINITY, 0.0, 0.0, 1.0}, h;
-    uint32_t best_p = BSP_NO_PRIM;
-    uint64_t leaves = 0, refs = 0, tests = 0;
-    bvh_walk w = {.next = 0};
-    const bvh_node *n;
-    while ((n = next_leaf(t, &br, tmin, tmax, &w))) {
-        uint32_t cnt = BVH_COUNT(n);
-        leaves++;
-        refs += cnt;
-        for (const kd_local *L = t->rec + n->index, *end = L + cnt; L != end; L++) {
-            if (L->prim == from)
-                continue;
-            tests++;
-            /* every hit found is at most tmax: better when its t is smaller
-             * or, at equal t, its index lower (the naive order) */
-            if (kd_local_isect(s, L, &r, tmax, &h) && (h.t < best.t || L->prim < best_p)) {
-                best = h;
-                best_p = L->prim;
-                tmax = h.t;
-            }
-        }
-    }
+    closest c = {.s = s, .rec = t->rec, .from = from, .best_p = BSP_NO_PRIM, .tmax = ray->tmax};
+    c.best = (scene_isect_hit){INFINITY, 0.0, 0.0, 1.0};
+    isect_ray_init(&c.r, ray, s->hit_tol); /* in the domain: checked */
+    bvh_walk w;
+    w.sp = 0;
+    w.tested = 0;
+    walk(t, &br, ray->tmin, &c.tmax, &w, closest_leaf, &c);
     /* interior: every box tested but the leaves entered; no empty leaves,
      * no skips; mailbox hits = refs - tests = the left-out primitive */
-    query_count(q, w.tested - leaves, leaves, 0, leaves, refs, tests);
-    if (best_p == BSP_NO_PRIM)
+    query_count(q, w.tested - c.leaves, c.leaves, 0, c.leaves, c.refs, c.tests);
+    if (c.best_p == BSP_NO_PRIM)
         return 0;
-    scene_hit_finish(&best, best_p, hit);
+    scene_hit_finish(&c.best, c.best_p, hit);
     return 1;
+}
+
+/* The any-hit query's state, for its leaf step. */
+typedef struct any {
+    const bsp_scene *s;
+    const kd_local *rec;
+    isect_ray r;
+    uint32_t from;
+    double tmax;
+    uint64_t leaves, refs, tests;
+} any;
+
+static inline __attribute__((always_inline)) int any_leaf(void *ctx, const bvh_node *n)
+{
+    any *c = ctx;
+    uint32_t cnt = BVH_COUNT(n);
+    scene_isect_hit h;
+    c->leaves++;
+    c->refs += cnt;
+    for (const kd_local *L = c->rec + n->index, *end = L + cnt; L != end; L++) {
+        if (L->prim == c->from)
+            continue;
+        c->tests++;
+        if (kd_local_isect(c->s, L, &c->r, c->tmax, &h))
+            return 1;
+    }
+    return 0;
 }
 
 int bvh_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from)
@@ -166,24 +241,12 @@ int bvh_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t 
         return 0;
     bvh_ray br;
     bvh_ray_init(&br, ray);
-    isect_ray r;
-    isect_ray_init(&r, ray, s->hit_tol);
-    scene_isect_hit h;
-    uint64_t leaves = 0, refs = 0, tests = 0;
-    bvh_walk w = {.next = 0};
-    const bvh_node *n;
-    int found = 0;
-    while (!found && (n = next_leaf(t, &br, ray->tmin, ray->tmax, &w))) {
-        uint32_t cnt = BVH_COUNT(n);
-        leaves++;
-        refs += cnt;
-        for (const kd_local *L = t->rec + n->index, *end = L + cnt; L != end && !found; L++) {
-            if (L->prim == from)
-                continue;
-            tests++;
-            found = kd_local_isect(s, L, &r, ray->tmax, &h);
-        }
-    }
-    query_count(q, w.tested - leaves, leaves, 0, leaves, refs, tests);
+    any c = {.s = s, .rec = t->rec, .from = from, .tmax = ray->tmax};
+    isect_ray_init(&c.r, ray, s->hit_tol);
+    bvh_walk w;
+    w.sp = 0;
+    w.tested = 0;
+    int found = walk(t, &br, ray->tmin, &c.tmax, &w, any_leaf, &c);
+    query_count(q, w.tested - c.leaves, c.leaves, 0, c.leaves, c.refs, c.tests);
     return found;
 }
