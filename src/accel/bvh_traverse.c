@@ -142,20 +142,22 @@ walk(const bvh *t, const bvh_ray *r, double tmin, const double *tmax, bvh_walk *
     }
 }
 
-/* The closest-hit query's state, for its leaf step. */
-typedef struct closest {
+/* A query's state, for its leaf steps. */
+typedef struct query_state {
     const bsp_scene *s;
     const kd_local *rec;
     isect_ray r;
     uint32_t from, best_p;
-    double tmax; /* follows the best hit; t never depends on it */
+    double tmax; /* closest hit: follows the best hit; t never depends on it */
     scene_isect_hit best;
     uint64_t leaves, refs, tests;
-} closest;
+} query_state;
 
-static inline __attribute__((always_inline)) int closest_leaf(void *ctx, const bvh_node *n)
+/* Tests leaf N's records for the query C, closest hit or ANY hit; 1 when an
+ * any-hit query found one. */
+static inline __attribute__((always_inline)) int leaf_records(query_state *c,
+                                                              const bvh_node *n, int any)
 {
-    closest *c = ctx;
     uint32_t cnt = BVH_COUNT(n);
     scene_isect_hit h;
     c->leaves++;
@@ -164,16 +166,29 @@ static inline __attribute__((always_inline)) int closest_leaf(void *ctx, const b
         if (L->prim == c->from)
             continue;
         c->tests++;
+        if (!kd_local_isect(c->s, L, &c->r, c->tmax, &h))
+            continue;
+        if (any)
+            return 1;
         /* every hit found is at most tmax: better when its t is smaller or,
          * at equal t, its index lower (the naive order) */
-        if (kd_local_isect(c->s, L, &c->r, c->tmax, &h) &&
-            (h.t < c->best.t || L->prim < c->best_p)) {
+        if (h.t < c->best.t || L->prim < c->best_p) {
             c->best = h;
             c->best_p = L->prim;
             c->tmax = h.t;
         }
     }
     return 0;
+}
+
+static inline __attribute__((always_inline)) int closest_leaf(void *ctx, const bvh_node *n)
+{
+    return leaf_records(ctx, n, 0);
+}
+
+static inline __attribute__((always_inline)) int any_leaf(void *ctx, const bvh_node *n)
+{
+    return leaf_records(ctx, n, 1);
 }
 
 int bvh_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
@@ -188,7 +203,8 @@ int bvh_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t
         return 0;
     bvh_ray br;
     bvh_ray_init(&br, ray);
-    closest c = {.s = s, .rec = t->rec, .from = from, .best_p = BSP_NO_PRIM, .tmax = ray->tmax};
+    query_state c = {.s = s, .rec = t->rec, .from = from, .best_p = BSP_NO_PRIM,
+                     .tmax = ray->tmax};
     c.best = (scene_isect_hit){INFINITY, 0.0, 0.0, 1.0};
     isect_ray_init(&c.r, ray, s->hit_tol); /* in the domain: checked */
     bvh_walk w;
@@ -204,33 +220,6 @@ int bvh_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t
     return 1;
 }
 
-/* The any-hit query's state, for its leaf step. */
-typedef struct any {
-    const bsp_scene *s;
-    const kd_local *rec;
-    isect_ray r;
-    uint32_t from;
-    double tmax;
-    uint64_t leaves, refs, tests;
-} any;
-
-static inline __attribute__((always_inline)) int any_leaf(void *ctx, const bvh_node *n)
-{
-    any *c = ctx;
-    uint32_t cnt = BVH_COUNT(n);
-    scene_isect_hit h;
-    c->leaves++;
-    c->refs += cnt;
-    for (const kd_local *L = c->rec + n->index, *end = L + cnt; L != end; L++) {
-        if (L->prim == c->from)
-            continue;
-        c->tests++;
-        if (kd_local_isect(c->s, L, &c->r, c->tmax, &h))
-            return 1;
-    }
-    return 0;
-}
-
 int bvh_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from)
 {
     const bvh *t = a->impl;
@@ -241,7 +230,7 @@ int bvh_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t 
         return 0;
     bvh_ray br;
     bvh_ray_init(&br, ray);
-    any c = {.s = s, .rec = t->rec, .from = from, .tmax = ray->tmax};
+    query_state c = {.s = s, .rec = t->rec, .from = from, .tmax = ray->tmax};
     isect_ray_init(&c.r, ray, s->hit_tol);
     bvh_walk w;
     w.sp = 0;
