@@ -1,9 +1,9 @@
 /*
  * fuzz_input.h — what the fuzz targets share: an input is one format byte
  * and a scene file. The byte's value modulo 3 picks the reader (NFF, OBJ,
- * PLY), its value divided by 3 (modulo 5) the structure the target compares
- * with the naive method (sah, kaplan, sah-per, grid, octree), and its value
- * divided by 15 (modulo 2) the variant: for the octree where the nodes are
+ * PLY), its value divided by 3 (modulo 6) the structure the target compares
+ * with the naive method (sah, kaplan, sah-per, grid, octree, bvh), and its
+ * value divided by 18 (modulo 2) the variant: for the octree where the nodes are
  * cut (the centre, the cost estimate), for the grid uniform or recursive
  * (three levels, cells of more than 2 primitives cut).
  */
@@ -29,11 +29,12 @@ static inline bsp_scene *fuzz_scene(const uint8_t *d, size_t n, bsp_accel_kind *
 {
     if (n < 1)
         return NULL;
-    static const bsp_accel_kind kinds[5] = {BSP_ACCEL_SAH, BSP_ACCEL_KAPLAN, BSP_ACCEL_SAH_PER,
-                                            BSP_ACCEL_GRID, BSP_ACCEL_OCTREE};
+    static const bsp_accel_kind kinds[6] = {BSP_ACCEL_SAH,    BSP_ACCEL_KAPLAN,
+                                            BSP_ACCEL_SAH_PER, BSP_ACCEL_GRID,
+                                            BSP_ACCEL_OCTREE, BSP_ACCEL_BVH};
     int fmt = d[0] % 3;
-    *kind = kinds[(d[0] / 3) % 5];
-    *variant = (d[0] / 15) % 2;
+    *kind = kinds[(d[0] / 3) % 6];
+    *variant = (d[0] / 18) % 2;
     const char *buf = (const char *)d + 1;
     bsp_scene *s = NULL;
     bsp_error err = {0};
