@@ -49,6 +49,7 @@ static const char *const default_scenes[] = {
 static const char usage[] =
     "usage: bspray-embree [SCENE...] [--res N] [--rounds R] [--threads N] [--csv FILE]\n"
     "                     [--by-outcome] [--twice] [--pixel-order rows|tiles]\n"
+    "                     [--accel METHOD]\n"
     "\n"
     "Primary-ray throughput of bspray (SAH kd-tree, mailboxes: what `bspray bench`\n"
     "times) against Embree 3 (high-quality BVH, robust off, rtcIntersect1,\n"
@@ -75,6 +76,10 @@ static const char usage[] =
     "                 (default, the order of every earlier session: row by row of\n"
     "                 the image) or tiles (the square tiles 'bspray render' traces,\n"
     "                 each row by row)\n"
+    "  --accel METHOD bspray's structure (default sah, with its default options):\n"
+    "                 any method of 'bspray render --accel' but the named variants;\n"
+    "                 e.g. bvh, to set bspray's BVH against Embree's on the same\n"
+    "                 kernels' answers\n"
     "  --help         this text\n"
     "\n"
     "Prints a Markdown table (progress on stderr). Exit status 1 on bad arguments or\n"
@@ -89,6 +94,7 @@ typedef struct options {
     int by_outcome; /* --by-outcome */
     int shots;      /* queries per ray in a timed pass: 1, or 2 with --twice */
     bsp_pixel_order order; /* --pixel-order: the order the rays are recorded and shot in */
+    bsp_accel_kind kind;   /* --accel: bspray's structure */
 } options;
 
 /* --- small utilities ---------------------------------------------------------------- */
@@ -906,11 +912,12 @@ static void time_rounds(const options *o, const embree_scene *es, const struct R
     free(ratio);
 }
 
-static bsp_accel *build_bspray(const bsp_scene *scene, int threads)
+static bsp_accel *build_bspray(const bsp_scene *scene, int threads, bsp_accel_kind kind)
 {
     bsp_build_options bo;
     bsp_build_options_defaults(&bo); /* sah, mailboxes: what bench times */
     bo.threads = threads;
+    bo.kind = kind;
     bsp_accel *accel = NULL;
     bsp_error err;
     if (bsp_accel_build(scene, &bo, &accel, &err) != BSP_OK) {
@@ -972,7 +979,7 @@ static int run_scene(const options *o, RTCDevice dev, const char *name, result r
     }
     r->nprims = bsp_scene_prim_count(scene);
     fprintf(stderr, "%s: %s: building bspray and Embree\n", prog, name);
-    bsp_accel *accel = build_bspray(scene, o->threads);
+    bsp_accel *accel = build_bspray(scene, o->threads, o->kind);
     if (!accel) {
         bsp_scene_destroy(scene);
         return 1;
@@ -1021,8 +1028,9 @@ static void print_header(RTCDevice dev, const options *o)
            "rtcIntersect1 with an incoherent context; spheres and cones as user geometry "
            "(double-precision callbacks); builds on %d thread(s).\n",
            (long)(v / 10000), (long)(v / 100 % 100), (long)(v % 100), o->threads);
-    printf("bspray: default build (sah, mailboxes), bsp_intersect. %d x %d primary rays, "
+    printf("bspray: %s build (%s, mailboxes), bsp_intersect. %d x %d primary rays, "
            "single thread, thread CPU time, best of %d interleaved rounds%s.\n\n",
+           o->kind == BSP_ACCEL_SAH ? "default" : "--accel", bsp_accel_kind_name(o->kind),
            o->res, o->res, o->rounds,
            o->shots == 2 ? "; every ray shot twice in a row (--twice), its time covering both"
                          : "");
@@ -1077,6 +1085,7 @@ static int parse_args(int argc, char **argv, options *o)
     o->rounds = 5;
     o->threads = 1;
     o->shots = 1;
+    o->kind = BSP_ACCEL_SAH;
     o->csv_path = NULL;
     o->by_outcome = 0;
     o->order = BSP_PIXELS_ROWS;
@@ -1097,6 +1106,10 @@ static int parse_args(int argc, char **argv, options *o)
                 return fprintf(stderr, "%s: --threads wants 1..256, not '%s'\n", prog, argv[i]), 1;
         } else if (!strcmp(a, "--csv") && has_value) {
             o->csv_path = argv[++i];
+        } else if (!strcmp(a, "--accel") && has_value) {
+            bsp_error err;
+            if (bsp_accel_kind_parse(argv[++i], &o->kind, &err) != BSP_OK)
+                return fprintf(stderr, "%s: %s\n", prog, err.message), 1;
         } else if (!strcmp(a, "--twice")) {
             o->shots = 2;
         } else if (!strcmp(a, "--by-outcome")) {
