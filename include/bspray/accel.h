@@ -52,9 +52,11 @@ typedef enum bsp_accel_kind {
                             max_depth counts octree levels */
     BSP_ACCEL_BVH,       /* bounding volume hierarchy: binary, object partitioning, binned
                             SAH (Wald 2007) with the kd-trees' per-kind costs T_i, at
-                            most 8 primitives per leaf; the structure most ray tracers
-                            use, for comparison. One build thread; max_depth,
-                            max_leaf_prims and the mailbox do not apply */
+                            the structure most ray tracers use, for comparison. One
+                            build thread; max_leaf_prims (default 8) and max_depth
+                            (default and at most 60) bound its leaves, which may
+                            exceed max_leaf_prims only where their centroids
+                            coincide; the mailbox does not apply */
     BSP_ACCEL_KIND_COUNT
 } bsp_accel_kind;
 

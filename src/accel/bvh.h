@@ -34,8 +34,8 @@
 /* The deepest a node may lie (the traversal's stack holds one entry per
  * level); a node at this depth becomes a leaf whatever its size. */
 #define BVH_MAX_DEPTH 60
-/* Leaves hold at most this many primitives, unless their centroids cannot
- * be told apart or the depth limit is met. */
+/* Leaves hold at most this many primitives by default (max_leaf_prims),
+ * unless their centroids cannot be told apart or the depth limit is met. */
 #define BVH_LEAF_MAX 8
 /* Centroid bins per axis of the binned SAH. */
 #define BVH_BINS 16

@@ -7,8 +7,10 @@
  * (A the surface area of a box, T_i the kd-trees' per-kind intersection
  * costs, bsp_build_options.sah_costs) is evaluated between every two bins,
  * and the cheapest split is taken when it beats the leaf's cost sum_i T_i or
- * the node holds more than BVH_LEAF_MAX primitives. Centroids that all
- * coincide are halved in index order. One thread; O(N log N) for a tree of
+ * the node holds more than the most primitives a leaf may hold
+ * (bsp_build_options.max_leaf_prims, default BVH_LEAF_MAX). Centroids that
+ * all coincide are halved in index order; a node at max_depth (default and
+ * at most BVH_MAX_DEPTH) is a leaf. One thread; O(N log N) for a tree of
  * logarithmic depth. Layout and exactness: bvh.h.
  */
 #include <math.h>
@@ -28,6 +30,8 @@ typedef struct builder {
     bvh_node *nodes;
     uint32_t nnodes;
     double ctrav;
+    uint32_t leaf_max; /* a node of more primitives is split (if it can be) */
+    int depth_max;     /* a node this deep is a leaf */
 } builder;
 
 /* X rounded to a float towards -inf / +inf: the float box contains the
@@ -122,8 +126,8 @@ static int choose_split(const builder *b, uint32_t begin, uint32_t end, const bs
         }
     }
     if (best == INFINITY) /* every centroid the same: halve by index when too many */
-        return n > BVH_LEAF_MAX ? (out->axis = 0, out->last_left = -1, 1) : 0;
-    return best < tsum || n > BVH_LEAF_MAX;
+        return n > b->leaf_max ? (out->axis = 0, out->last_left = -1, 1) : 0;
+    return best < tsum || n > b->leaf_max;
 }
 
 /* Partitions ORDER[begin, end) by C: the left side first; returns where the
@@ -168,7 +172,7 @@ static void build_node(builder *b, uint32_t me, uint32_t begin, uint32_t end, in
         node->hi[k] = float_up(box.hi.v[k]);
     }
     split_choice c = {0, -1, 0.0, 0.0};
-    if (depth >= BVH_MAX_DEPTH || !choose_split(b, begin, end, &box, &cbox, tsum, &c)) {
+    if (depth >= b->depth_max || !choose_split(b, begin, end, &box, &cbox, tsum, &c)) {
         node->index = begin;
         node->meta = (end - begin) << 2;
         return;
@@ -226,6 +230,13 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
     t->costs = cm.c;
     builder b = {0};
     b.ctrav = cm.c.traversal;
+    /* the limits, 0s filled in (bsp_accel_get_options reports them) */
+    if (a->opts.max_leaf_prims <= 0)
+        a->opts.max_leaf_prims = BVH_LEAF_MAX;
+    if (a->opts.max_depth <= 0 || a->opts.max_depth > BVH_MAX_DEPTH)
+        a->opts.max_depth = BVH_MAX_DEPTH;
+    b.leaf_max = (uint32_t)a->opts.max_leaf_prims;
+    b.depth_max = a->opts.max_depth;
     bsp_box *bounds = bigmem_malloc((np ? np : 1) * sizeof *bounds);
     double *cost = bigmem_malloc((np ? np : 1) * sizeof *cost);
     b.order = malloc((n ? n : 1) * sizeof *b.order);
