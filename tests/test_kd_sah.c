@@ -591,8 +591,9 @@ static bsp_ray face_ray(const bvh *b, bsp_box box)
     if (!b->nnodes)
         return r;
     uint32_t i = (uint32_t)(rnd() * b->nnodes) % b->nnodes;
+    const bvh_node n = bvh_get(b, i == 1 ? 0 : i); /* id 1 is unused */
     unsigned axis = (unsigned)(rnd() * 3) % 3;
-    r.org.v[axis] = rnd() < 0.5 ? (double)b->nodes[i].lo[axis] : (double)b->nodes[i].hi[axis];
+    r.org.v[axis] = rnd() < 0.5 ? (double)n.lo[axis] : (double)n.hi[axis];
     if (rnd() < 0.5)
         r.dir.v[axis] = 0.0;
     if (r.dir.x == 0 && r.dir.y == 0 && r.dir.z == 0)

@@ -61,13 +61,15 @@ static void collect_planes(const bsp_accel *a, plane_list *pl, int limit)
     }
     if (bsp_accel_get_kind(a) == BSP_ACCEL_BVH) {
         const bvh *b = a->impl; /* its boxes' faces */
-        for (uint32_t i = 0; i < b->nnodes && pl->n + 6 <= limit; i++)
+        for (uint32_t i = 0; i < b->nnodes && pl->n + 6 <= limit; i += 1 + (i == 0)) {
+            const bvh_node n = bvh_get(b, i); /* id 1 is unused */
             for (unsigned k = 0; k < 3; k++) {
                 pl->axis[pl->n] = k;
-                pl->value[pl->n++] = b->nodes[i].lo[k];
+                pl->value[pl->n++] = n.lo[k];
                 pl->axis[pl->n] = k;
-                pl->value[pl->n++] = b->nodes[i].hi[k];
+                pl->value[pl->n++] = n.hi[k];
             }
+        }
         return;
     }
     const kd_tree *t = a->impl;

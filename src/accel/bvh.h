@@ -3,15 +3,17 @@
  * SAH), the structure most ray tracers use today, built here to compare the
  * kd-trees with on the same kernels, rays and counters (`--accel bvh`).
  *
- * Layout: 32-byte nodes, each holding its own box in floats rounded
- * outward. The root is node 0 (node 1 is unused); every other node lies
- * beside its sibling, the pair at an even index, left then right, so that
- * the two boxes a traversal tests together share one 64-byte line (the array
- * is 64-byte aligned). An interior node's `index` is its pair's. Leaves are
- * runs of the primitives' records (kd_local.h: the kernels' data, copied bit
- * for bit) in the order the leaves list them, so a leaf is `count` records
- * from `index`. Every live primitive is in exactly one leaf: no mailbox is
- * needed, and none is used.
+ * Layout: a node is its box, in floats rounded outward, an index and a
+ * count (bvh_node). The root is node 0 and kept apart; every other node lies
+ * beside its sibling in a 64-byte pair (bvh_pair: left then right, node ids
+ * 2 + 2p and 3 + 2p for pair p, so id 1 is unused), its boxes stored axis by
+ * axis with the two siblings' bounds side by side, so that one line holds
+ * both boxes a traversal tests together and two-wide vector code loads each
+ * bound of both with one convert. An interior node's `index` is its pair's
+ * first id. Leaves are runs of the primitives' records (kd_local.h: the
+ * kernels' data, copied bit for bit) in the order the leaves list them, so a
+ * leaf is `count` records from `index`. Every live primitive is in exactly
+ * one leaf: no mailbox is needed, and none is used.
  *
  * Exactness invariant: a node's box contains the bounds of every primitive
  * below it grown by `pad` (KD_PAD_REL times the scene scale: four times the
@@ -42,11 +44,17 @@
 
 typedef struct bvh_node {
     float lo[3], hi[3]; /* the box, rounded outward from the padded doubles */
-    uint32_t index;     /* interior: its children's pair; leaf: the first record */
+    uint32_t index;     /* interior: its children's pair (first id); leaf: the first record */
     uint32_t meta;      /* count << 2 | axis; count 0: interior, split on axis */
 } bvh_node;
 
-_Static_assert(sizeof(bvh_node) == 32, "a BVH node is 32 bytes");
+/* Two siblings: child c's box is lo[k][c]..hi[k][c] on axis k. */
+typedef struct bvh_pair {
+    float lo[3][2], hi[3][2];
+    uint32_t index[2], meta[2]; /* as bvh_node's */
+} bvh_pair;
+
+_Static_assert(sizeof(bvh_pair) == 64, "a BVH pair is one 64-byte line");
 
 #define BVH_COUNT(n) ((n)->meta >> 2)
 #define BVH_AXIS(n) ((n)->meta & 3u)
@@ -54,15 +62,33 @@ _Static_assert(sizeof(bvh_node) == 32, "a BVH node is 32 bytes");
 #define BVH_MAX_PRIMS ((uint32_t)1 << 30)
 
 typedef struct bvh {
-    bvh_node *nodes; /* 64-byte aligned, inside nodes_block */
-    void *nodes_block;
-    uint32_t nnodes; /* 0: no live primitive; else 2 + 2 x (interior nodes) */
+    bvh_node root;
+    bvh_pair *pairs; /* 64-byte aligned, inside pairs_block */
+    void *pairs_block;
+    uint32_t nnodes; /* node ids in use + 1: 0, no live primitive; else 2 + 2 x pairs */
     kd_local *rec;  /* nrec records in leaf order */
     uint32_t nrec;
     double pad;     /* the bounds padding (KD_PAD_REL x scene scale) */
     double ctrav;   /* the cost model of the build: C_trav, and T_i by kind */
     bsp_sah_costs costs;
 } bvh;
+
+/* Node ID of T (0 the root, 2 + 2p + c child c of pair p). */
+static inline bvh_node bvh_get(const bvh *t, uint32_t id)
+{
+    if (id == 0)
+        return t->root;
+    const bvh_pair *p = &t->pairs[(id - 2) >> 1];
+    unsigned c = id & 1u;
+    bvh_node n;
+    for (unsigned k = 0; k < 3; k++) {
+        n.lo[k] = p->lo[k][c];
+        n.hi[k] = p->hi[k][c];
+    }
+    n.index = p->index[c];
+    n.meta = p->meta[c];
+    return n;
+}
 
 /* Builds A's BVH over A->scene (options A->opts): sets A's ops and impl.
  * BSP_ERR_NOMEM or BSP_ERR_LIMIT (more than bsp_build_options.max_tree_bytes

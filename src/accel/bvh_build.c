@@ -27,7 +27,7 @@ typedef struct builder {
     const bsp_box *bounds; /* per primitive: its bounds grown by pad */
     const double *cost;    /* per primitive: T_i */
     uint32_t *order;       /* the live primitives, partitioned as the build goes */
-    bvh_node *nodes;
+    bvh *t;
     uint32_t nnodes;
     double ctrav;
     uint32_t leaf_max; /* a node of more primitives is split (if it can be) */
@@ -149,9 +149,26 @@ static uint32_t partition(builder *b, uint32_t begin, uint32_t end, const split_
     return i;
 }
 
-/* Builds the subtree of ORDER[begin, end) (not empty) at DEPTH in node ME,
+/* Stores N as node ID of T (bvh.h). */
+static void set_node(bvh *t, uint32_t id, const bvh_node *n)
+{
+    if (id == 0) {
+        t->root = *n;
+        return;
+    }
+    bvh_pair *p = &t->pairs[(id - 2) >> 1];
+    unsigned c = id & 1u;
+    for (unsigned k = 0; k < 3; k++) {
+        p->lo[k][c] = n->lo[k];
+        p->hi[k][c] = n->hi[k];
+    }
+    p->index[c] = n->index;
+    p->meta[c] = n->meta;
+}
+
+/* Builds the subtree of ORDER[begin, end) (not empty) at DEPTH as node ME,
  * its children's pairs from b->nnodes on. Never runs out of room: a tree of
- * n non-empty leaves has n - 1 pairs, and b->nodes holds 2 + 2 (n - 1). */
+ * n non-empty leaves has n - 1 pairs, and b->t->pairs holds that many. */
 static void build_node(builder *b, uint32_t me, uint32_t begin, uint32_t end, int depth)
 {
     bsp_box box = box_empty(), cbox = box_empty();
@@ -166,22 +183,24 @@ static void build_node(builder *b, uint32_t me, uint32_t begin, uint32_t end, in
         }
         tsum += b->cost[b->order[j]];
     }
-    bvh_node *node = &b->nodes[me];
+    bvh_node node;
     for (unsigned k = 0; k < 3; k++) {
-        node->lo[k] = float_down(box.lo.v[k]);
-        node->hi[k] = float_up(box.hi.v[k]);
+        node.lo[k] = float_down(box.lo.v[k]);
+        node.hi[k] = float_up(box.hi.v[k]);
     }
     split_choice c = {0, -1, 0.0, 0.0};
     if (depth >= b->depth_max || !choose_split(b, begin, end, &box, &cbox, tsum, &c)) {
-        node->index = begin;
-        node->meta = (end - begin) << 2;
+        node.index = begin;
+        node.meta = (end - begin) << 2;
+        set_node(b->t, me, &node);
         return;
     }
     uint32_t mid = partition(b, begin, end, &c);
     uint32_t pair = b->nnodes;
     b->nnodes += 2;
-    node->index = pair;
-    node->meta = c.axis;
+    node.index = pair;
+    node.meta = c.axis;
+    set_node(b->t, me, &node);
     build_node(b, pair, begin, mid, depth + 1);
     build_node(b, pair + 1, mid, end, depth + 1);
 }
@@ -191,7 +210,7 @@ void bvh_destroy(void *impl)
     bvh *t = impl;
     if (!t)
         return;
-    free(t->nodes_block);
+    free(t->pairs_block);
     free(t->rec);
     free(t);
 }
@@ -214,8 +233,8 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
         return error_set(err, BSP_ERR_LIMIT, NULL, 0,
                          "a BVH holds at most %u primitives, the scene has %zu",
                          (unsigned)BVH_MAX_PRIMS - 1, n);
-    const size_t nodes_cap = n ? 2 * n : 0; /* the root, an unused slot, n - 1 pairs */
-    const size_t bytes = nodes_cap * sizeof(bvh_node) + n * sizeof(kd_local);
+    const size_t npairs = n ? n - 1 : 0;
+    const size_t bytes = npairs * sizeof(bvh_pair) + n * sizeof(kd_local);
     const size_t limit = accel_max_bytes(&a->opts);
     if (limit && bytes > limit)
         return error_set(err, BSP_ERR_LIMIT, NULL, 0,
@@ -241,12 +260,12 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
     double *cost = bigmem_malloc((np ? np : 1) * sizeof *cost);
     b.order = malloc((n ? n : 1) * sizeof *b.order);
     /* 63 bytes more, to start the array on a line */
-    t->nodes_block = bigmem_malloc((nodes_cap ? nodes_cap : 1) * sizeof *t->nodes + 63);
-    if (t->nodes_block)
-        t->nodes = (bvh_node *)(((uintptr_t)t->nodes_block + 63) & ~(uintptr_t)63);
+    t->pairs_block = bigmem_malloc((npairs ? npairs : 1) * sizeof *t->pairs + 63);
+    if (t->pairs_block)
+        t->pairs = (bvh_pair *)(((uintptr_t)t->pairs_block + 63) & ~(uintptr_t)63);
     t->rec = bigmem_malloc((n ? n : 1) * sizeof *t->rec);
     bsp_status st = BSP_OK;
-    if (!bounds || !cost || !b.order || !t->nodes || !t->rec) {
+    if (!bounds || !cost || !b.order || !t->pairs || !t->rec) {
         st = bvh_oom(err);
         goto done;
     }
@@ -260,10 +279,9 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
     }
     b.bounds = bounds;
     b.cost = cost;
-    b.nodes = t->nodes;
+    b.t = t;
     if (n) {
-        memset(&t->nodes[1], 0, sizeof t->nodes[1]); /* unused: keeps the pairs on lines */
-        b.nnodes = 2;
+        b.nnodes = 2; /* the root, and id 1, unused */
         build_node(&b, 0, 0, (uint32_t)n, 0);
     }
     t->nnodes = b.nnodes;

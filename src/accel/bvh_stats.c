@@ -37,7 +37,7 @@ static void push_children(node_at *stack, unsigned *sp, const bvh_node *n, node_
 void bvh_stats(const bvh *b, const bsp_scene *scene, bsp_tree_stats *st)
 {
     memset(st, 0, sizeof *st);
-    st->bytes = (uint64_t)b->nnodes * sizeof(bvh_node);
+    st->bytes = b->nnodes ? sizeof(bvh_node) + (uint64_t)(b->nnodes - 2) / 2 * sizeof(bvh_pair) : 0;
     st->trace_bytes = (uint64_t)b->nrec * sizeof(kd_local);
     uint64_t h = FNV1A_BASIS;
     for (uint32_t i = 0; i < b->nrec; i++)
@@ -46,7 +46,7 @@ void bvh_stats(const bvh *b, const bsp_scene *scene, bsp_tree_stats *st)
         st->digest = h;
         return;
     }
-    const bsp_box root = node_box(&b->nodes[0]);
+    const bsp_box root = node_box(&b->root);
     const double inv_root = 1.0 / kd_surface_area(&root);
     double depth_sum = 0.0, expected = 0.0, model = 0.0;
     node_at stack[BVH_MAX_DEPTH + 2];
@@ -54,7 +54,7 @@ void bvh_stats(const bvh *b, const bsp_scene *scene, bsp_tree_stats *st)
     stack[sp++] = (node_at){0, 0};
     while (sp) {
         node_at at = stack[--sp];
-        const bvh_node *n = &b->nodes[at.i];
+        const bvh_node node = bvh_get(b, at.i), *n = &node;
         bsp_box box = node_box(n);
         double p = kd_surface_area(&box) * inv_root;
         uint32_t cnt = BVH_COUNT(n);
@@ -76,9 +76,11 @@ void bvh_stats(const bvh *b, const bsp_scene *scene, bsp_tree_stats *st)
         }
     }
     for (uint32_t i = 0; i < b->nnodes; i++) {
-        const bvh_node *n = &b->nodes[i];
+        if (i == 1)
+            continue; /* unused */
+        const bvh_node n = bvh_get(b, i);
         uint32_t w[8];
-        memcpy(w, n, sizeof w); /* the unused slot is zeroed */
+        memcpy(w, &n, sizeof w);
         for (int k = 0; k < 8; k++)
             h = fnv1a_u32(h, w[k]);
     }
@@ -118,7 +120,7 @@ bsp_status bvh_check(const bvh *b, const bsp_scene *scene, bsp_error *err)
     stack[sp++] = (node_at){0, 0};
     while (sp && st == BSP_OK) {
         node_at at = stack[--sp];
-        const bvh_node *n = &b->nodes[at.i];
+        const bvh_node node = bvh_get(b, at.i), *n = &node;
         visited++;
         path[at.depth] = node_box(n);
         uint32_t cnt = BVH_COUNT(n);
@@ -188,7 +190,7 @@ bsp_status bvh_visit(const bvh *b, int max_depth,
     stack[sp++] = (node_at){0, 0};
     while (sp) {
         node_at at = stack[--sp];
-        const bvh_node *n = &b->nodes[at.i];
+        const bvh_node node = bvh_get(b, at.i), *n = &node;
         bsp_cell_info c;
         memset(&c, 0, sizeof c);
         c.box = node_box(n);
@@ -199,15 +201,15 @@ bsp_status bvh_visit(const bvh *b, int max_depth,
             c.refs = cnt;
         } else {
             c.axis = BVH_AXIS(n);
-            c.split = b->nodes[n->index + 1].lo[c.axis];
+            c.split = bvh_get(b, n->index + 1).lo[c.axis];
             /* the references below: the records from the leftmost leaf's
              * first to the rightmost leaf's last, in record order */
-            const bvh_node *l = n, *r = n;
-            while (!BVH_COUNT(l))
-                l = &b->nodes[l->index];
-            while (!BVH_COUNT(r))
-                r = &b->nodes[r->index + 1];
-            c.refs = (uint64_t)r->index + BVH_COUNT(r) - l->index;
+            bvh_node l = *n, r = *n;
+            while (!BVH_COUNT(&l))
+                l = bvh_get(b, l.index);
+            while (!BVH_COUNT(&r))
+                r = bvh_get(b, r.index + 1);
+            c.refs = (uint64_t)r.index + BVH_COUNT(&r) - l.index;
         }
         int go = visit(&c, ctx);
         if (go && !cnt && (max_depth < 0 || at.depth < max_depth)) {

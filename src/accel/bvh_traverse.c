@@ -9,18 +9,24 @@
  * subtree (bvh.h: hits lie 3/4 pad inside every box above them, and the slab
  * arithmetic errs far less), so the skip loses no hit, ties included.
  *
+ * The two boxes of a pair are tested at once, in SSE2's two double lanes
+ * where the compiler offers them (x86-64 always does), else one after the
+ * other: the same operations on the same doubles either way.
+ *
  * Slabs of zero direction components: 1 / d is +-inf, so (lo - o) / d is
  * -inf or +inf, the whole line, when o lies strictly inside the slab, and
  * an empty interval when outside; NaN only when o lies exactly on a face,
- * where no accepted hit of the node can lie and either answer is safe. The
- * min and max below are written as compares so that a NaN cannot make a
- * loop run on: every path ends.
+ * where no accepted hit of the node can lie and either answer is safe. No
+ * loop depends on those values: every path ends.
  *
  * Counters: N_TS counts the node boxes tested, N_ETS / leaves the leaves
  * entered (none is empty), N_IT the primitives tested; the mailbox counts
  * nothing (each primitive is in one leaf).
  */
 #include <math.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "accel/bvh.h"
 
@@ -38,7 +44,7 @@ static inline double max2(double a, double b)
 }
 
 /* Whether R's interval [T0, T1] meets the box of N (see above for zero
- * direction components); *ENTRY is where it enters. */
+ * direction components); *ENTRY is where it enters. (The root's test.) */
 static inline int box_hit(const bvh_node *n, const bvh_ray *r, double t0, double t1,
                           double *entry)
 {
@@ -50,6 +56,42 @@ static inline int box_hit(const bvh_node *n, const bvh_ray *r, double t0, double
     }
     *entry = t0;
     return t0 <= t1;
+}
+
+/* Which boxes of pair P R's interval [T0, T1] meets (bit c for child c);
+ * E[c] is where it enters child c's. */
+static inline __attribute__((always_inline)) unsigned
+pair_hit(const bvh_pair *p, const bvh_ray *r, double t0, double t1, double e[2])
+{
+#if defined(__SSE2__)
+    __m128d lo_t = _mm_set1_pd(t0), hi_t = _mm_set1_pd(t1);
+    for (unsigned k = 0; k < 3; k++) {
+        /* both siblings' bounds on axis k, converted at once */
+        __m128d lo = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)p->lo[k])));
+        __m128d hi = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)p->hi[k])));
+        __m128d o = _mm_set1_pd(r->o[k]), inv = _mm_set1_pd(r->inv[k]);
+        __m128d a = _mm_mul_pd(_mm_sub_pd(lo, o), inv);
+        __m128d b = _mm_mul_pd(_mm_sub_pd(hi, o), inv);
+        lo_t = _mm_max_pd(lo_t, _mm_min_pd(a, b));
+        hi_t = _mm_min_pd(hi_t, _mm_max_pd(a, b));
+    }
+    _mm_storeu_pd(e, lo_t);
+    return (unsigned)_mm_movemask_pd(_mm_cmple_pd(lo_t, hi_t));
+#else
+    unsigned mask = 0;
+    for (unsigned c = 0; c < 2; c++) {
+        double a0 = t0, a1 = t1;
+        for (unsigned k = 0; k < 3; k++) {
+            double a = ((double)p->lo[k][c] - r->o[k]) * r->inv[k];
+            double b = ((double)p->hi[k][c] - r->o[k]) * r->inv[k];
+            a0 = max2(a0, min2(a, b));
+            a1 = min2(a1, max2(a, b));
+        }
+        e[c] = a0;
+        mask |= (unsigned)(a0 <= a1) << c;
+    }
+    return mask;
+#endif
 }
 
 static inline void bvh_ray_init(bvh_ray *r, const bsp_ray *ray)
@@ -67,8 +109,8 @@ static inline int bvh_in_domain(const bsp_scene *s, const bsp_ray *ray)
     return scene_ray_in_domain(s, ray->org.v, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
 }
 
-/* A walk of the tree: the nodes still to visit, each with its entry t, and
- * the count of boxes tested. */
+/* A walk of the tree: the nodes still to visit (ids, bvh.h), each with its
+ * entry t, and the count of boxes tested. */
 typedef struct bvh_walk {
     unsigned sp;
     uint64_t tested;
@@ -76,9 +118,9 @@ typedef struct bvh_walk {
     double entry[BVH_MAX_DEPTH + 2];
 } bvh_walk;
 
-/* One query's leaf step: tests the records of leaf N against the ray and
+/* One query's leaf step: tests COUNT records from FIRST against the ray and
  * says whether the query is over (an any-hit query found one). */
-typedef int (*leaf_fn)(void *ctx, const bvh_node *n);
+typedef int (*leaf_fn)(void *ctx, uint32_t first, uint32_t count);
 
 /* The walk of T for R over [TMIN, *TMAX] (*TMAX may shrink as LEAF finds
  * hits), calling LEAF for every leaf whose box the interval meets, nearer
@@ -89,40 +131,39 @@ walk(const bvh *t, const bvh_ray *r, double tmin, const double *tmax, bvh_walk *
      void *ctx)
 {
     double e0;
-    const bvh_node *nodes = t->nodes;
     w->tested++;
-    if (!box_hit(&nodes[0], r, tmin, *tmax, &e0))
+    if (!box_hit(&t->root, r, tmin, *tmax, &e0))
         return 0;
-    if (BVH_COUNT(&nodes[0]))
-        return leaf(ctx, &nodes[0]);
-    uint32_t pair = nodes[0].index;
+    if (BVH_COUNT(&t->root))
+        return leaf(ctx, t->root.index, BVH_COUNT(&t->root));
+    uint32_t pair = t->root.index; /* the pair's first id */
     for (;;) {
-        const bvh_node *c = &nodes[pair];
+        const bvh_pair *p = &t->pairs[(pair - 2) >> 1];
         double e[2];
-        int hit0 = box_hit(&c[0], r, tmin, *tmax, &e[0]);
-        int hit1 = box_hit(&c[1], r, tmin, *tmax, &e[1]);
+        unsigned hit = pair_hit(p, r, tmin, *tmax, e);
         w->tested += 2;
-        unsigned near = hit1 && (!hit0 || e[1] < e[0]), far = !near;
-        int hit_far = near ? hit0 : hit1;
+        unsigned near = hit == 2 || (hit == 3 && e[1] < e[0]), far = !near;
         int go = -1; /* the child to enter */
-        if (hit0 | hit1) {
-            if (!BVH_COUNT(&c[near]))
+        if (hit) {
+            uint32_t cnt = p->meta[near] >> 2;
+            if (!cnt)
                 go = (int)near;
-            else if (leaf(ctx, &c[near]))
+            else if (leaf(ctx, p->index[near], cnt))
                 return 1;
         }
-        if (hit_far && e[far] <= *tmax) { /* not beyond a hit the near leaf found */
+        if (hit == 3 && e[far] <= *tmax) { /* not beyond a hit the near leaf found */
+            uint32_t cnt = p->meta[far] >> 2;
             if (go >= 0) {
                 w->node[w->sp] = pair + far;
                 w->entry[w->sp++] = e[far];
-            } else if (!BVH_COUNT(&c[far])) {
+            } else if (!cnt) {
                 go = (int)far;
-            } else if (leaf(ctx, &c[far])) {
+            } else if (leaf(ctx, p->index[far], cnt)) {
                 return 1;
             }
         }
         if (go >= 0) {
-            pair = c[go].index;
+            pair = p->index[go];
             continue;
         }
         for (;;) { /* the next node pushed still nearer than the best hit */
@@ -131,12 +172,14 @@ walk(const bvh *t, const bvh_ray *r, double tmin, const double *tmax, bvh_walk *
             w->sp--;
             if (w->entry[w->sp] > *tmax)
                 continue;
-            const bvh_node *n = &nodes[w->node[w->sp]];
-            if (!BVH_COUNT(n)) {
-                pair = n->index;
+            uint32_t id = w->node[w->sp];
+            const bvh_pair *q = &t->pairs[(id - 2) >> 1];
+            uint32_t cnt = q->meta[id & 1u] >> 2;
+            if (!cnt) {
+                pair = q->index[id & 1u];
                 break;
             }
-            if (leaf(ctx, n))
+            if (leaf(ctx, q->index[id & 1u], cnt))
                 return 1;
         }
     }
@@ -153,16 +196,15 @@ typedef struct query_state {
     uint64_t leaves, refs, tests;
 } query_state;
 
-/* Tests leaf N's records for the query C, closest hit or ANY hit; 1 when an
- * any-hit query found one. */
-static inline __attribute__((always_inline)) int leaf_records(query_state *c,
-                                                              const bvh_node *n, int any)
+/* Tests the CNT records from FIRST for the query C, closest hit or ANY hit;
+ * 1 when an any-hit query found one. */
+static inline __attribute__((always_inline)) int leaf_records(query_state *c, uint32_t first,
+                                                              uint32_t cnt, int any)
 {
-    uint32_t cnt = BVH_COUNT(n);
     scene_isect_hit h;
     c->leaves++;
     c->refs += cnt;
-    for (const kd_local *L = c->rec + n->index, *end = L + cnt; L != end; L++) {
+    for (const kd_local *L = c->rec + first, *end = L + cnt; L != end; L++) {
         if (L->prim == c->from)
             continue;
         c->tests++;
@@ -181,14 +223,16 @@ static inline __attribute__((always_inline)) int leaf_records(query_state *c,
     return 0;
 }
 
-static inline __attribute__((always_inline)) int closest_leaf(void *ctx, const bvh_node *n)
+static inline __attribute__((always_inline)) int closest_leaf(void *ctx, uint32_t first,
+                                                              uint32_t cnt)
 {
-    return leaf_records(ctx, n, 0);
+    return leaf_records(ctx, first, cnt, 0);
 }
 
-static inline __attribute__((always_inline)) int any_leaf(void *ctx, const bvh_node *n)
+static inline __attribute__((always_inline)) int any_leaf(void *ctx, uint32_t first,
+                                                          uint32_t cnt)
 {
-    return leaf_records(ctx, n, 1);
+    return leaf_records(ctx, first, cnt, 1);
 }
 
 int bvh_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
