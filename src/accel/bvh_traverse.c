@@ -11,7 +11,8 @@
  *
  * The two boxes of a pair are tested at once, in SSE2's two double lanes
  * where the compiler offers them (x86-64 always does), else one after the
- * other: the same operations on the same doubles either way.
+ * other: the same operations on the same doubles either way (their min and
+ * max differ only in which operand a NaN yields, below).
  *
  * Slabs of zero direction components: 1 / d is +-inf, so (lo - o) / d is
  * -inf or +inf, the whole line, when o lies strictly inside the slab, and
@@ -43,17 +44,22 @@ static inline double max2(double a, double b)
     return b > a ? b : a;
 }
 
+/* Clips [*T0, *T1] to R's slab LO..HI on axis K. */
+static inline void slab(const bvh_ray *r, unsigned k, float lo, float hi, double *t0, double *t1)
+{
+    double a = ((double)lo - r->o[k]) * r->inv[k];
+    double b = ((double)hi - r->o[k]) * r->inv[k];
+    *t0 = max2(*t0, min2(a, b));
+    *t1 = min2(*t1, max2(a, b));
+}
+
 /* Whether R's interval [T0, T1] meets the box of N (see above for zero
  * direction components); *ENTRY is where it enters. (The root's test.) */
 static inline int box_hit(const bvh_node *n, const bvh_ray *r, double t0, double t1,
                           double *entry)
 {
-    for (unsigned k = 0; k < 3; k++) {
-        double a = ((double)n->lo[k] - r->o[k]) * r->inv[k];
-        double b = ((double)n->hi[k] - r->o[k]) * r->inv[k];
-        t0 = max2(t0, min2(a, b));
-        t1 = min2(t1, max2(a, b));
-    }
+    for (unsigned k = 0; k < 3; k++)
+        slab(r, k, n->lo[k], n->hi[k], &t0, &t1);
     *entry = t0;
     return t0 <= t1;
 }
@@ -81,12 +87,8 @@ pair_hit(const bvh_pair *p, const bvh_ray *r, double t0, double t1, double e[2])
     unsigned mask = 0;
     for (unsigned c = 0; c < 2; c++) {
         double a0 = t0, a1 = t1;
-        for (unsigned k = 0; k < 3; k++) {
-            double a = ((double)p->lo[k][c] - r->o[k]) * r->inv[k];
-            double b = ((double)p->hi[k][c] - r->o[k]) * r->inv[k];
-            a0 = max2(a0, min2(a, b));
-            a1 = min2(a1, max2(a, b));
-        }
+        for (unsigned k = 0; k < 3; k++)
+            slab(r, k, p->lo[k][c], p->hi[k][c], &a0, &a1);
         e[c] = a0;
         mask |= (unsigned)(a0 <= a1) << c;
     }
