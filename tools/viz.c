@@ -49,8 +49,8 @@ static const char viz_help[] =
     "                   binary PPM, anything else PNG (required)\n"
     "  --accel LIST     comma-separated methods, one row each: kaplan, sah, sah-per,\n"
     "                   sah-par, sah-mixed (default sah), octree, octree-cost, grid,\n"
-    "                   grid-bounds, grid-rec (see --grid-*) or bvh (its node boxes,\n"
-    "                   which may overlap; a node's \"plane\" is its right child's low face)\n"
+    "                   grid-bounds, grid-rec (see --grid-*) or bvh (its camera view\n"
+    "                   draws every node's box, which may overlap, instead of planes)\n"
     "  --max-depth N    the trees' maximum depth (default 10, the paper's setting for\n"
     "                   its pictures); also the end of the depth colour scale. An octree\n"
     "                   gets (N + 2) / 3 levels (three kd levels each)\n"
@@ -315,14 +315,18 @@ int cmd_viz(int argc, char **argv)
         char text[160];
         /* camera view */
         draw_paste(panel, back, 0, 0);
-        draw_panel_planes(panel, &pin, c, max_depth);
+        const int boxes = rows[r].method.kind == BSP_ACCEL_BVH; /* overlapping boxes */
+        if (boxes)
+            draw_panel_boxes(panel, &pin, c, max_depth);
+        else
+            draw_panel_planes(panel, &pin, c, max_depth);
         draw_panel_root(panel, &pin, c);
         snprintf(text, sizeof text, "%s: %" PRIu64 " LEAVES (%" PRIu64 " EMPTY)",
                  rows[r].label, c->leaves, c->empty);
         text_upper(text);
         int y = 2 * font;
         y += draw_label(panel, 2 * font, y, font, text) + font;
-        draw_label(panel, 2 * font, y, font, "SPLIT PLANES BY DEPTH");
+        draw_label(panel, 2 * font, y, font, boxes ? "NODE BOXES BY DEPTH" : "SPLIT PLANES BY DEPTH");
         draw_frame(panel, 0, 0, size - 1, size - 1, frame, 1.f);
         draw_paste(out, panel, 0, r * size);
         /* top view */

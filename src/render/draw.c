@@ -484,17 +484,36 @@ void draw_panel_planes(bsp_image *img, const draw_pinhole *p, const draw_cells *
     }
 }
 
+/* The twelve edges of B, projected by P. */
+static void draw_box_edges(bsp_image *img, const draw_pinhole *p, bsp_box b, const float rgb[3],
+                           float alpha)
+{
+    for (int k = 0; k < 8; k++)
+        for (int bit = 1; bit < 8; bit <<= 1)
+            if (!(k & bit))
+                draw_segment_3d(img, p, box_corner(b, k), box_corner(b, k | bit), rgb, alpha);
+}
+
+void draw_panel_boxes(bsp_image *img, const draw_pinhole *p, const draw_cells *cells,
+                      int depth_scale)
+{
+    for (int d = cells->max_depth; d >= 1; d--) {
+        float rgb[3];
+        double t = depth_scale > 0 ? (double)d / depth_scale : 0.0;
+        draw_colormap(t, rgb);
+        float alpha = (float)(0.95 - 0.35 * (t < 1 ? t : 1));
+        for (size_t i = 0; i < cells->count; i++)
+            if (cells->cell[i].depth == d)
+                draw_box_edges(img, p, cells->cell[i].box, rgb, alpha);
+    }
+}
+
 void draw_panel_root(bsp_image *img, const draw_pinhole *p, const draw_cells *cells)
 {
     if (cells->count == 0)
         return;
     static const float white[3] = {1, 1, 1};
-    bsp_box root = cells->cell[0].box;
-    for (int k = 0; k < 8; k++)
-        for (int bit = 1; bit < 8; bit <<= 1)
-            if (!(k & bit))
-                draw_segment_3d(img, p, box_corner(root, k), box_corner(root, k | bit), white,
-                                0.7f);
+    draw_box_edges(img, p, cells->cell[0].box, white, 0.7f);
 }
 
 /* The frustum's two horizontal edges and the eye, seen from above. */

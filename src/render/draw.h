@@ -142,6 +142,11 @@ DRAW_HIDDEN void draw_cell_color(draw_color_mode mode, double value, double scal
  * planes stay on top; deeper planes are more translucent. */
 DRAW_HIDDEN void draw_panel_planes(bsp_image *img, const draw_pinhole *p, const draw_cells *cells,
                                    int depth_scale);
+/* Camera panel for a hierarchy of boxes (a BVH, whose boxes may overlap):
+ * the twelve edges of every node's box below the root, coloured and faded by
+ * depth as draw_panel_planes does, deepest first. */
+DRAW_HIDDEN void draw_panel_boxes(bsp_image *img, const draw_pinhole *p, const draw_cells *cells,
+                                  int depth_scale);
 /* The twelve edges of the root cell, in white. */
 DRAW_HIDDEN void draw_panel_root(bsp_image *img, const draw_pinhole *p, const draw_cells *cells);
 
