@@ -458,14 +458,21 @@ static bsp_vec3 box_corner(bsp_box b, int k)
     return bsp_v3(k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z);
 }
 
+/* The colour and opacity of the lines of depth D on a scale ending at
+ * DEPTH_SCALE: the many deep ones fainter. */
+static float depth_style(int d, int depth_scale, float rgb[3])
+{
+    double t = depth_scale > 0 ? (double)d / depth_scale : 0.0;
+    draw_colormap(t, rgb);
+    return (float)(0.95 - 0.35 * (t < 1 ? t : 1));
+}
+
 void draw_panel_planes(bsp_image *img, const draw_pinhole *p, const draw_cells *cells,
                        int depth_scale)
 {
     for (int d = cells->max_depth; d >= 0; d--) {
         float rgb[3];
-        double t = depth_scale > 0 ? (double)d / depth_scale : 0.0;
-        draw_colormap(t, rgb);
-        float alpha = (float)(0.95 - 0.35 * (t < 1 ? t : 1)); /* the many deep planes fainter */
+        float alpha = depth_style(d, depth_scale, rgb);
         for (size_t i = 0; i < cells->count; i++) {
             const bsp_cell_info *c = &cells->cell[i];
             if (c->is_leaf || c->depth != d)
@@ -499,9 +506,7 @@ void draw_panel_boxes(bsp_image *img, const draw_pinhole *p, const draw_cells *c
 {
     for (int d = cells->max_depth; d >= 1; d--) {
         float rgb[3];
-        double t = depth_scale > 0 ? (double)d / depth_scale : 0.0;
-        draw_colormap(t, rgb);
-        float alpha = (float)(0.95 - 0.35 * (t < 1 ? t : 1));
+        float alpha = depth_style(d, depth_scale, rgb);
         for (size_t i = 0; i < cells->count; i++)
             if (cells->cell[i].depth == d)
                 draw_box_edges(img, p, cells->cell[i].box, rgb, alpha);
