@@ -230,6 +230,49 @@ TEST(viz_first_split_plane_at_hand_computed_column)
     bsp_scene_destroy(s);
 }
 
+/* A BVH's camera view draws its node boxes below the root: two spheres at
+ * x = -5 and 5 (radius 1), a leaf each, seen from (0, 0, 20) down -z at 32
+ * pixels per unit at distance 1. The right leaf's box [4, 6] x [-1, 1]^2
+ * projects to columns 32 + 32 x / (20 - z): 38.1 to 42.1 over z = -1..1,
+ * rows 32 -+ 32 / 19 or 21: 30.3 to 33.7; the left one mirrored. */
+TEST(viz_bvh_boxes_at_hand_computed_pixels)
+{
+    bsp_error err;
+    bsp_scene *s = two_spheres();
+    REQUIRE(s);
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_BVH;
+    o.max_leaf_prims = 1;
+    bsp_accel *a = NULL;
+    REQUIRE(bsp_accel_build(s, &o, &a, &err) == BSP_OK);
+    draw_cells cells;
+    REQUIRE(draw_cells_collect(a, &cells, &err) == BSP_OK);
+    REQUIRE(cells.count == 3);
+    CHECK_EQ_INT(cells.leaves, 2);
+    bsp_camera cam = make_camera(bsp_v3(0, 0, 20), bsp_v3(0, 0, 0), bsp_v3(0, 1, 0), 90, 64);
+    draw_pinhole p;
+    draw_pinhole_init(&p, &cam, 64, 64, 1e-3);
+    bsp_image *img = bsp_image_create(64, 64);
+    REQUIRE(img);
+    draw_panel_boxes(img, &p, &cells, 1);
+    int left = 0, right = 0;
+    for (int y = 0; y < 64; y++)
+        for (int x = 0; x < 64; x++)
+            if (!is_black(img, x, y)) {
+                int in_right = x >= 38 && x <= 42, in_left = x >= 21 && x <= 25;
+                CHECK_MSG((in_left || in_right) && y >= 30 && y <= 33, "pixel (%d, %d) painted",
+                          x, y);
+                left += in_left;
+                right += in_right;
+            }
+    CHECK(left > 4 && right > 4);
+    bsp_image_destroy(img);
+    draw_cells_free(&cells);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}
+
 /* --- clipping --------------------------------------------------------------------------- */
 
 TEST(viz_near_plane_clipping_draws_the_visible_part)
