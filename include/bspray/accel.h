@@ -51,7 +51,8 @@ typedef enum bsp_accel_kind {
                             at the centre or by a cost estimate (octree_split).
                             max_depth counts octree levels */
     BSP_ACCEL_BVH,       /* bounding volume hierarchy: binary, object partitioning, binned
-                            SAH (Wald 2007) with the kd-trees' per-kind costs T_i, at
+                            SAH (Wald 2007) with the kd-trees' per-kind costs T_i and
+                            C_trav twice theirs (sah_costs.traversal, default 1);
                             the structure most ray tracers use, for comparison. One
                             build thread; max_leaf_prims (default 8) and max_depth
                             (default and at most 60) bound its leaves, which may

@@ -241,6 +241,9 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
                          "the BVH would take %zu bytes, over the limit of %zu", bytes, limit);
     kd_cost_model cm;
     kd_cost_resolve(&a->opts, &cm);
+    /* a step tests a pair of boxes: BVH_TRAVERSAL_COST kd-tree steps (the
+     * T_i stay the kd-trees') */
+    cm.c.traversal *= BVH_TRAVERSAL_COST;
     bvh *t = calloc(1, sizeof *t);
     if (!t)
         return bvh_oom(err);
