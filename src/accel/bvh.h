@@ -74,8 +74,7 @@ typedef struct bvh {
     kd_local *rec;  /* nrec records in leaf order */
     uint32_t nrec;
     double pad;     /* the bounds padding (KD_PAD_REL x scene scale) */
-    double ctrav;   /* the cost model of the build: C_trav, and T_i by kind */
-    bsp_sah_costs costs;
+    bsp_sah_costs costs; /* the build's cost model: C_trav (traversal) and T_i by kind */
 } bvh;
 
 /* Node ID of T (0 the root, 2 + 2p + c child c of pair p). */

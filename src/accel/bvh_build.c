@@ -248,7 +248,6 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
     if (!t)
         return bvh_oom(err);
     t->pad = KD_PAD_REL * scene_scale(s);
-    t->ctrav = cm.c.traversal;
     t->costs = cm.c;
     builder b = {0};
     b.ctrav = cm.c.traversal;

@@ -21,17 +21,74 @@ static bsp_box node_box(const bvh_node *n)
     return b;
 }
 
-/* A node and its depth on the explicit stacks of the walks below. */
-typedef struct node_at {
-    uint32_t i;
-    int depth;
-} node_at;
+/* What a walk's step says: go into the node's children, skip them, or stop. */
+enum { WALK_STOP = -1, WALK_SKIP = 0, WALK_DOWN = 1 };
 
-/* Pushes the children of interior node AT (N), the left one on top. */
-static void push_children(node_at *stack, unsigned *sp, const bvh_node *n, node_at at)
+/* Walks B (not empty) depth first, a node before its children, left before
+ * right, calling STEP with each node's id, the node and its depth; STEP's
+ * answer for an interior node decides whether its children follow. STEP must
+ * not send the walk below BVH_MAX_DEPTH (the built trees do not go there;
+ * the checker refuses a node that would). */
+static void walk_nodes(const bvh *b, int (*step)(void *ctx, uint32_t id, const bvh_node *n,
+                                                 int depth),
+                       void *ctx)
 {
-    stack[(*sp)++] = (node_at){n->index + 1, at.depth + 1};
-    stack[(*sp)++] = (node_at){n->index, at.depth + 1};
+    struct {
+        uint32_t id;
+        int depth;
+    } stack[BVH_MAX_DEPTH + 2];
+    unsigned sp = 0;
+    stack[sp].id = 0;
+    stack[sp++].depth = 0;
+    while (sp) {
+        sp--;
+        uint32_t id = stack[sp].id;
+        int depth = stack[sp].depth;
+        const bvh_node n = bvh_get(b, id);
+        int go = step(ctx, id, &n, depth);
+        if (go == WALK_STOP)
+            return;
+        if (go == WALK_DOWN && !BVH_COUNT(&n)) {
+            stack[sp].id = n.index + 1; /* the right child under the left */
+            stack[sp++].depth = depth + 1;
+            stack[sp].id = n.index;
+            stack[sp++].depth = depth + 1;
+        }
+    }
+}
+
+/* bvh_stats's sums over the walk. */
+typedef struct stats_walk {
+    const bvh *b;
+    const bsp_scene *scene;
+    bsp_tree_stats *st;
+    double inv_root, depth_sum, expected, model;
+} stats_walk;
+
+static int stats_step(void *ctx, uint32_t id, const bvh_node *n, int depth)
+{
+    (void)id;
+    stats_walk *w = ctx;
+    bsp_box box = node_box(n);
+    double p = kd_surface_area(&box) * w->inv_root;
+    uint32_t cnt = BVH_COUNT(n);
+    if (!cnt) {
+        w->st->interior_nodes++;
+        w->expected += p;
+        w->model += p * w->b->costs.traversal;
+        return WALK_DOWN;
+    }
+    w->st->leaves++;
+    w->st->references += cnt;
+    w->depth_sum += depth;
+    if (depth > w->st->max_leaf_depth)
+        w->st->max_leaf_depth = depth;
+    double tsum = 0.0;
+    for (uint32_t j = n->index; j < n->index + cnt; j++)
+        tsum += kd_prim_cost(w->scene, w->b->rec[j].prim, &w->b->costs);
+    w->expected += p * cnt;
+    w->model += p * tsum;
+    return WALK_DOWN;
 }
 
 void bvh_stats(const bvh *b, const bsp_scene *scene, bsp_tree_stats *st)
@@ -47,46 +104,20 @@ void bvh_stats(const bvh *b, const bsp_scene *scene, bsp_tree_stats *st)
         return;
     }
     const bsp_box root = node_box(&b->root);
-    const double inv_root = 1.0 / kd_surface_area(&root);
-    double depth_sum = 0.0, expected = 0.0, model = 0.0;
-    node_at stack[BVH_MAX_DEPTH + 2];
-    unsigned sp = 0;
-    stack[sp++] = (node_at){0, 0};
-    while (sp) {
-        node_at at = stack[--sp];
-        const bvh_node node = bvh_get(b, at.i), *n = &node;
-        bsp_box box = node_box(n);
-        double p = kd_surface_area(&box) * inv_root;
-        uint32_t cnt = BVH_COUNT(n);
-        if (cnt) {
-            st->leaves++;
-            st->references += cnt;
-            depth_sum += at.depth;
-            st->max_leaf_depth = at.depth > st->max_leaf_depth ? at.depth : st->max_leaf_depth;
-            double tsum = 0.0;
-            for (uint32_t j = n->index; j < n->index + cnt; j++)
-                tsum += kd_prim_cost(scene, b->rec[j].prim, &b->costs);
-            expected += p * cnt;
-            model += p * tsum;
-        } else {
-            st->interior_nodes++;
-            expected += p;
-            model += p * b->ctrav;
-            push_children(stack, &sp, n, at);
-        }
-    }
+    stats_walk w = {b, scene, st, 1.0 / kd_surface_area(&root), 0.0, 0.0, 0.0};
+    walk_nodes(b, stats_step, &w);
     for (uint32_t i = 0; i < b->nnodes; i++) {
         if (i == 1)
             continue; /* unused */
         const bvh_node n = bvh_get(b, i);
-        uint32_t w[8];
-        memcpy(w, &n, sizeof w);
+        uint32_t words[8];
+        memcpy(words, &n, sizeof words);
         for (int k = 0; k < 8; k++)
-            h = fnv1a_u32(h, w[k]);
+            h = fnv1a_u32(h, words[k]);
     }
-    st->avg_leaf_depth = st->leaves ? depth_sum / (double)st->leaves : 0.0;
-    st->expected_cost = expected;
-    st->model_cost = model / b->ctrav;
+    st->avg_leaf_depth = st->leaves ? w.depth_sum / (double)st->leaves : 0.0;
+    st->expected_cost = w.expected;
+    st->model_cost = w.model / b->costs.traversal;
     st->digest = h;
 }
 
@@ -96,6 +127,70 @@ static int box_inside(const bsp_box *in, const bsp_box *out)
         if (!(in->lo.v[k] >= out->lo.v[k] && in->hi.v[k] <= out->hi.v[k]))
             return 0;
     return 1;
+}
+
+/* bvh_check's state over the walk. */
+typedef struct check_walk {
+    const bvh *b;
+    const bsp_scene *scene;
+    bsp_error *err;
+    bsp_status st;
+    unsigned char *seen;              /* per primitive: listed already */
+    uint32_t next_rec, visited;
+    bsp_box path[BVH_MAX_DEPTH + 1];  /* the boxes from the root to the node */
+} check_walk;
+
+static int check_fail(check_walk *w, bsp_status st)
+{
+    w->st = st;
+    return WALK_STOP;
+}
+
+static int check_step(void *ctx, uint32_t id, const bvh_node *n, int depth)
+{
+    check_walk *w = ctx;
+    const bvh *b = w->b;
+    w->visited++;
+    w->path[depth] = node_box(n);
+    uint32_t cnt = BVH_COUNT(n);
+    if (!cnt) {
+        /* pairs at even indices after the node: each reached once, no cycle */
+        if (depth >= BVH_MAX_DEPTH || n->index % 2 || n->index <= id ||
+            n->index + 1 >= b->nnodes || BVH_AXIS(n) > 2)
+            return check_fail(w, error_set(w->err, BSP_ERR_INVALID, NULL, 0,
+                                           "BVH node %u: children %u and %u of %u nodes, "
+                                           "depth %d",
+                                           id, n->index, n->index + 1, b->nnodes, depth));
+        return WALK_DOWN;
+    }
+    /* leaves come in record order, left before right */
+    if (n->index != w->next_rec || cnt > b->nrec - w->next_rec)
+        return check_fail(w, error_set(w->err, BSP_ERR_INVALID, NULL, 0,
+                                       "BVH leaf %u: records %u..%u, expected from %u of %u",
+                                       id, n->index, n->index + cnt, w->next_rec, b->nrec));
+    w->next_rec += cnt;
+    for (uint32_t j = n->index; j < n->index + cnt; j++) {
+        uint32_t p = b->rec[j].prim;
+        if (p >= w->scene->nprims || w->scene->prims[p].shape == SHAPE_NONE || w->seen[p])
+            return check_fail(w, error_set(w->err, BSP_ERR_INVALID, NULL, 0,
+                                           "BVH leaf %u: primitive %u dropped, unknown or "
+                                           "listed twice",
+                                           id, p));
+        w->seen[p] = 1;
+        kd_local fresh;
+        kd_local_fill(&fresh, w->scene, p);
+        if (memcmp(&fresh, &b->rec[j], sizeof fresh) != 0)
+            return check_fail(w, error_set(w->err, BSP_ERR_INVALID, NULL, 0,
+                                           "BVH record %u: not primitive %u's data", j, p));
+        bsp_box pb = box_grow(bsp_scene_prim_bounds(w->scene, p), b->pad);
+        for (int d = 0; d <= depth; d++)
+            if (!box_inside(&pb, &w->path[d]))
+                return check_fail(w, error_set(w->err, BSP_ERR_INVALID, NULL, 0,
+                                               "BVH: primitive %u's padded bounds leave the "
+                                               "box of its ancestor at depth %d (leaf %u)",
+                                               p, d, id));
+    }
+    return WALK_DOWN;
 }
 
 bsp_status bvh_check(const bvh *b, const bsp_scene *scene, bsp_error *err)
@@ -108,76 +203,54 @@ bsp_status bvh_check(const bvh *b, const bsp_scene *scene, bsp_error *err)
                          b->nrec, live);
     if (!b->nnodes)
         return live ? error_set(err, BSP_ERR_INVALID, NULL, 0, "BVH: no nodes") : BSP_OK;
-    unsigned char *seen = calloc(scene->nprims ? scene->nprims : 1, 1);
-    if (!seen)
+    check_walk w = {.b = b, .scene = scene, .err = err, .st = BSP_OK};
+    w.seen = calloc(scene->nprims ? scene->nprims : 1, 1);
+    if (!w.seen)
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory while checking the BVH");
-    bsp_status st = BSP_OK;
-    /* the boxes along the path: a primitive's padded bounds must lie in each */
-    bsp_box path[BVH_MAX_DEPTH + 1];
-    node_at stack[BVH_MAX_DEPTH + 2];
-    unsigned sp = 0;
-    uint32_t next_rec = 0, visited = 0;
-    stack[sp++] = (node_at){0, 0};
-    while (sp && st == BSP_OK) {
-        node_at at = stack[--sp];
-        const bvh_node node = bvh_get(b, at.i), *n = &node;
-        visited++;
-        path[at.depth] = node_box(n);
-        uint32_t cnt = BVH_COUNT(n);
-        if (!cnt) {
-            /* pairs at even indices after the node: each reached once, no cycle */
-            if (at.depth >= BVH_MAX_DEPTH || n->index % 2 || n->index <= at.i ||
-                n->index + 1 >= b->nnodes || BVH_AXIS(n) > 2) {
-                st = error_set(err, BSP_ERR_INVALID, NULL, 0,
-                               "BVH node %u: children %u and %u of %u nodes, depth %d", at.i,
-                               n->index, n->index + 1, b->nnodes, at.depth);
-                break;
-            }
-            push_children(stack, &sp, n, at);
-            continue;
-        }
-        /* leaves come in record order, left before right */
-        if (n->index != next_rec || cnt > b->nrec - next_rec) {
-            st = error_set(err, BSP_ERR_INVALID, NULL, 0,
-                           "BVH leaf %u: records %u..%u, expected from %u of %u", at.i,
-                           n->index, n->index + cnt, next_rec, b->nrec);
-            break;
-        }
-        next_rec += cnt;
-        for (uint32_t j = n->index; j < n->index + cnt && st == BSP_OK; j++) {
-            uint32_t p = b->rec[j].prim;
-            kd_local fresh;
-            if (p >= scene->nprims || scene->prims[p].shape == SHAPE_NONE || seen[p]) {
-                st = error_set(err, BSP_ERR_INVALID, NULL, 0,
-                               "BVH leaf %u: primitive %u dropped, unknown or listed twice",
-                               at.i, p);
-                break;
-            }
-            seen[p] = 1;
-            kd_local_fill(&fresh, scene, p);
-            if (memcmp(&fresh, &b->rec[j], sizeof fresh) != 0) {
-                st = error_set(err, BSP_ERR_INVALID, NULL, 0,
-                               "BVH record %u: not primitive %u's data", j, p);
-                break;
-            }
-            bsp_box pb = box_grow(bsp_scene_prim_bounds(scene, p), b->pad);
-            for (int d = 0; d <= at.depth; d++)
-                if (!box_inside(&pb, &path[d])) {
-                    st = error_set(err, BSP_ERR_INVALID, NULL, 0,
-                                   "BVH: primitive %u's padded bounds leave the box of its "
-                                   "ancestor at depth %d (leaf %u)",
-                                   p, d, at.i);
-                    break;
-                }
-        }
-    }
+    walk_nodes(b, check_step, &w);
     /* every node but the unused slot 1 */
-    if (st == BSP_OK && (next_rec != b->nrec || visited + 1 != b->nnodes))
-        st = error_set(err, BSP_ERR_INVALID, NULL, 0,
-                       "BVH: %u of %u records and %u of %u nodes reached", next_rec, b->nrec,
-                       visited, b->nnodes);
-    free(seen);
-    return st;
+    if (w.st == BSP_OK && (w.next_rec != b->nrec || w.visited + 1 != b->nnodes))
+        w.st = error_set(err, BSP_ERR_INVALID, NULL, 0,
+                         "BVH: %u of %u records and %u of %u nodes reached", w.next_rec,
+                         b->nrec, w.visited, b->nnodes);
+    free(w.seen);
+    return w.st;
+}
+
+/* bvh_visit's caller and limit. */
+typedef struct visit_walk {
+    const bvh *b;
+    int max_depth;
+    int (*visit)(const bsp_cell_info *cell, void *ctx);
+    void *ctx;
+} visit_walk;
+
+static int visit_step(void *ctx, uint32_t id, const bvh_node *n, int depth)
+{
+    (void)id;
+    visit_walk *w = ctx;
+    bsp_cell_info c;
+    memset(&c, 0, sizeof c);
+    c.box = node_box(n);
+    c.depth = depth;
+    uint32_t cnt = BVH_COUNT(n);
+    c.is_leaf = cnt != 0;
+    if (cnt) {
+        c.refs = cnt;
+    } else {
+        c.axis = BVH_AXIS(n);
+        c.split = bvh_get(w->b, n->index + 1).lo[c.axis];
+        /* the references below: the records from the leftmost leaf's
+         * first to the rightmost leaf's last, in record order */
+        bvh_node l = *n, r = *n;
+        while (!BVH_COUNT(&l))
+            l = bvh_get(w->b, l.index);
+        while (!BVH_COUNT(&r))
+            r = bvh_get(w->b, r.index + 1);
+        c.refs = (uint64_t)r.index + BVH_COUNT(&r) - l.index;
+    }
+    int go = w->visit(&c, w->ctx);
+    return go && (w->max_depth < 0 || depth < w->max_depth) ? WALK_DOWN : WALK_SKIP;
 }
 
 bsp_status bvh_visit(const bvh *b, int max_depth,
@@ -185,36 +258,7 @@ bsp_status bvh_visit(const bvh *b, int max_depth,
 {
     if (!b->nnodes)
         return BSP_OK;
-    node_at stack[BVH_MAX_DEPTH + 2];
-    unsigned sp = 0;
-    stack[sp++] = (node_at){0, 0};
-    while (sp) {
-        node_at at = stack[--sp];
-        const bvh_node node = bvh_get(b, at.i), *n = &node;
-        bsp_cell_info c;
-        memset(&c, 0, sizeof c);
-        c.box = node_box(n);
-        c.depth = at.depth;
-        uint32_t cnt = BVH_COUNT(n);
-        c.is_leaf = cnt != 0;
-        if (cnt) {
-            c.refs = cnt;
-        } else {
-            c.axis = BVH_AXIS(n);
-            c.split = bvh_get(b, n->index + 1).lo[c.axis];
-            /* the references below: the records from the leftmost leaf's
-             * first to the rightmost leaf's last, in record order */
-            bvh_node l = *n, r = *n;
-            while (!BVH_COUNT(&l))
-                l = bvh_get(b, l.index);
-            while (!BVH_COUNT(&r))
-                r = bvh_get(b, r.index + 1);
-            c.refs = (uint64_t)r.index + BVH_COUNT(&r) - l.index;
-        }
-        int go = visit(&c, ctx);
-        if (go && !cnt && (max_depth < 0 || at.depth < max_depth)) {
-            push_children(stack, &sp, n, at);
-        }
-    }
+    visit_walk w = {b, max_depth, visit, ctx};
+    walk_nodes(b, visit_step, &w);
     return BSP_OK;
 }
