@@ -1,21 +1,24 @@
 /*
- * test_bvh.c — the BVH (`--accel bvh`) beyond the exactness tests it shares
- * with the kd-trees (test_kdtree.c, test_kd_sah.c): its leaf and depth
- * limits, its figures against a hand computation, its visit, and what it
- * refuses.
+ * test_bvh.c — the BVHs (`--accel bvh`, `bvh4`) beyond the exactness tests
+ * they share with the kd-trees (test_kdtree.c, test_kd_sah.c): their leaf
+ * and depth limits, their figures against a hand computation, their visit,
+ * the four-wide tree's collapse and its float and double paths, and what
+ * they refuse.
  */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
+#include "accel/bvh.h"
 #include "bspray/bspray.h"
 #include "harness.h"
 
-static bsp_accel *bvh_of(const bsp_scene *s, int leaf_size, int max_depth)
+static bsp_accel *bvh_kind_of(const bsp_scene *s, bsp_accel_kind kind, int leaf_size,
+                              int max_depth)
 {
     bsp_build_options o;
     bsp_build_options_defaults(&o);
-    o.kind = BSP_ACCEL_BVH;
+    o.kind = kind;
     o.max_leaf_prims = leaf_size;
     o.max_depth = max_depth;
     bsp_accel *a = NULL;
@@ -23,6 +26,11 @@ static bsp_accel *bvh_of(const bsp_scene *s, int leaf_size, int max_depth)
     REQUIRE_MSG(bsp_accel_build(s, &o, &a, &err) == BSP_OK, "%s", err.message);
     CHECK_MSG(bsp_accel_check(a, &err) == BSP_OK, "%s", err.message);
     return a;
+}
+
+static bsp_accel *bvh_of(const bsp_scene *s, int leaf_size, int max_depth)
+{
+    return bvh_kind_of(s, BSP_ACCEL_BVH, leaf_size, max_depth);
 }
 
 /* What a visit of every node sees. */
@@ -56,16 +64,25 @@ static int tally(const bsp_cell_info *c, void *ctx)
     return 1;
 }
 
+/* spd:teapot, and its live primitives in *N. */
+static bsp_scene *teapot(uint64_t *n)
+{
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE_MSG(bsp_scene_load("spd:teapot", &s, &err) == BSP_OK, "%s", err.message);
+    *n = bsp_scene_prim_count(s) - bsp_scene_kind_count(s, BSP_PRIM_DROPPED);
+    return s;
+}
+
 /* --leaf-size and --max-depth bound the leaves: at most L primitives each
  * (teapot's triangles have distinct centroids), no leaf deeper than the
  * limit; every primitive in exactly one leaf; the options report the
  * limits the build used. */
 TEST(bvh_leaves_respect_the_limits)
 {
-    bsp_scene *s = NULL;
     bsp_error err;
-    REQUIRE_MSG(bsp_scene_load("spd:teapot", &s, &err) == BSP_OK, "%s", err.message);
-    const uint64_t n = bsp_scene_prim_count(s) - bsp_scene_kind_count(s, BSP_PRIM_DROPPED);
+    uint64_t n;
+    bsp_scene *s = teapot(&n);
     static const struct {
         int leaf, depth;
     } cases[] = {{0, 0}, {1, 0}, {2, 0}, {4, 0}, {0, 4}, {1, 7}};
@@ -136,7 +153,8 @@ TEST(bvh_expected_cost_matches_hand_computation)
 TEST(bvh_empty_scene_and_no_save)
 {
     bsp_scene *s = bsp_scene_create();
-    bsp_accel *a = bvh_of(s, 0, 0);
+    for (int wide = 0; wide < 2; wide++) {
+    bsp_accel *a = bvh_kind_of(s, wide ? BSP_ACCEL_BVH4 : BSP_ACCEL_BVH, 0, 0);
     bsp_query *q = bsp_query_create(a);
     bsp_ray r = {bsp_v3(0, 0, -5), bsp_v3(0, 0, 1), 0.0, INFINITY};
     bsp_hit h;
@@ -149,8 +167,183 @@ TEST(bvh_empty_scene_and_no_save)
     harness_tmp_path(path, sizeof path, "bvh.tree");
     bsp_error err;
     CHECK(bsp_accel_save(a, path, &err) == BSP_ERR_INVALID);
-    CHECK_STR_CONTAINS(err.message, "bvh");
+    CHECK_STR_CONTAINS(err.message, wide ? "bvh4" : "bvh");
     bsp_query_destroy(q);
+    bsp_accel_destroy(a);
+    }
+    bsp_scene_destroy(s);
+}
+
+/* The four-wide tree is the binary one collapsed: on teapot, every interior
+ * node has two to four children, more than two on average, the leaves list
+ * every primitive once, children's boxes lie in their parents', and the
+ * limits hold as in the binary tree (a quad's levels count as its depth). */
+TEST(bvh4_collapse_keeps_leaves_and_limits)
+{
+    bsp_error err;
+    uint64_t n;
+    bsp_scene *s = teapot(&n);
+    static const struct {
+        int leaf, depth;
+    } cases[] = {{0, 0}, {1, 0}, {4, 0}, {1, 5}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        bsp_accel *a = bvh_kind_of(s, BSP_ACCEL_BVH4, cases[i].leaf, cases[i].depth);
+        int want_leaf = cases[i].leaf ? cases[i].leaf : 8;
+        int want_depth = cases[i].depth ? cases[i].depth : 60;
+        visit_tally t;
+        memset(&t, 0, sizeof t);
+        REQUIRE(bsp_accel_visit_cells(a, -1, tally, &t, &err) == BSP_OK);
+        bsp_tree_stats st;
+        bsp_accel_tree_stats(a, &st);
+        CHECK(t.refs == n && st.references == n);
+        CHECK(t.leaves == st.leaves && t.nodes == st.leaves + st.interior_nodes);
+        /* children: every node but the root is one */
+        uint64_t children = t.nodes - 1;
+        CHECK_MSG(children >= 2 * st.interior_nodes && children <= 4 * st.interior_nodes &&
+                      children > 2 * st.interior_nodes,
+                  "%llu children of %llu interior nodes", (unsigned long long)children,
+                  (unsigned long long)st.interior_nodes);
+        CHECK(st.bytes == 32 + 128 * st.interior_nodes);
+        CHECK(!t.bad_box);
+        CHECK(t.deepest <= want_depth);
+        if (!cases[i].depth)
+            CHECK(t.largest_leaf <= (uint64_t)want_leaf);
+        bsp_accel_destroy(a);
+    }
+    bsp_scene_destroy(s);
+}
+
+/* Three unit spheres far apart, a leaf each: the binary tree's two interior
+ * nodes become one quad of three children (its fourth lane unused), and a
+ * ray hits the nearest sphere. The checker refuses the quad once its unused
+ * lane is given a box. */
+TEST(bvh4_one_quad_and_its_unused_lane)
+{
+    bsp_scene *s = bsp_scene_create();
+    bsp_error err;
+    for (int i = 0; i < 3; i++)
+        REQUIRE(bsp_scene_add_sphere(s, bsp_v3(10.0 * i, 0, 0), 1.0, &err) == BSP_OK);
+    bsp_accel *a = bvh_kind_of(s, BSP_ACCEL_BVH4, 1, 0);
+    bsp_tree_stats st;
+    bsp_accel_tree_stats(a, &st);
+    CHECK_EQ_INT((int)st.interior_nodes, 1);
+    CHECK_EQ_INT((int)st.leaves, 3);
+    CHECK(st.bytes == 32 + 128);
+    bsp_query *q = bsp_query_create(a);
+    bsp_ray r = {bsp_v3(25, 0, 0), bsp_v3(-1, 0, 0), 0.0, INFINITY};
+    bsp_hit h;
+    REQUIRE(bsp_intersect(a, q, &r, &h));
+    CHECK_EQ_INT((int)h.prim, 2);
+    CHECK_NEAR(h.t, 4.0, 1e-12);
+    r.org = bsp_v3(5, -5, 0); /* between the spheres, across the row */
+    r.dir = bsp_v3(0, 1, 0);
+    CHECK(!bsp_intersect(a, q, &r, &h));
+    bsp_query_destroy(q);
+    bvh *b = a->impl;
+    REQUIRE(b->width == 4 && b->quads[0].index[3] == BVH_NONE);
+    b->quads[0].lo[1][3] = 0.0f;
+    CHECK(bsp_accel_check(a, &err) == BSP_ERR_INVALID);
+    CHECK_STR_CONTAINS(err.message, "quad");
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}
+
+/* A uniform number in [0, 1) from the generator *RNG. */
+static double next_u(uint64_t *rng)
+{
+    *rng = *rng * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (double)(*rng >> 11) / 9007199254740992.0;
+}
+
+/* The four-wide tree's two paths answer as the naive method: origins just
+ * inside and just outside the float tests' range (float_origin) on each
+ * axis, on its bound, and near the scene; directions of lengths 1e-90, 1 and
+ * 1e90 (the float path scales them by a power of two), some with a zero
+ * component; the rays aimed at the vertices of small triangles, which make
+ * the faces of the boxes (where a slab test's error would lose a hit), at
+ * points on their edges, and inside them; occlusion queries too. */
+TEST(bvh4_float_and_double_paths_match_naive)
+{
+    bsp_scene *s = bsp_scene_create();
+    bsp_error err;
+    enum { NTRI = 1500 };
+    static bsp_vec3 v[3 * NTRI];
+    uint64_t rng = 12345;
+    for (int i = 0; i < NTRI; i++) {
+        double c[3], e[3];
+        for (int k = 0; k < 3; k++)
+            c[k] = 2 * next_u(&rng) - 1;
+        for (int j = 0; j < 3; j++) {
+            for (int k = 0; k < 3; k++)
+                e[k] = c[k] + 0.02 * next_u(&rng);
+            v[3 * i + j] = bsp_v3(e[0], e[1], e[2]);
+        }
+        REQUIRE(bsp_scene_add_polygon(s, &v[3 * i], 3, &err) == BSP_OK);
+    }
+    bsp_accel *a = bvh_kind_of(s, BSP_ACCEL_BVH4, 0, 0);
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_NAIVE;
+    bsp_accel *nv = NULL;
+    REQUIRE(bsp_accel_build(s, &o, &nv, &err) == BSP_OK);
+    const bvh *b = a->impl;
+    REQUIRE(b->float_origin > 0.0);
+    bsp_query *qa = bsp_query_create(a), *qn = bsp_query_create(nv);
+    int rays = 0, hits = 0, bad = 0;
+    for (int i = 0; i < 12000 && bad < 5; i++) {
+        /* the target: a vertex, a point on an edge, or inside a triangle */
+        const bsp_vec3 *t = &v[3 * (int)(next_u(&rng) * NTRI)];
+        double w1 = next_u(&rng), w2 = next_u(&rng);
+        int where = i % 3;
+        if (where == 0)
+            w1 = w2 = 0.0;
+        else if (where == 1)
+            w2 = 0.0;
+        else if (w1 + w2 > 1.0)
+            w1 = 1.0 - w1, w2 = 1.0 - w2;
+        double p[3], org[3];
+        for (int k = 0; k < 3; k++) {
+            p[k] = t[0].v[k] + w1 * (t[1].v[k] - t[0].v[k]) + w2 * (t[2].v[k] - t[0].v[k]);
+            org[k] = p[k];
+        }
+        int axis = (i / 3) % 3, kase = (i / 9) % 4;
+        double side = (i / 36) % 2 ? 1.0 : -1.0;
+        if (kase == 0) /* just inside the float range */
+            org[axis] = side * nextafter(b->float_origin, 0.0);
+        else if (kase == 1) /* just outside: the double tests */
+            org[axis] = side * nextafter(b->float_origin, INFINITY);
+        else if (kase == 2) /* exactly on its bound */
+            org[axis] = side * b->float_origin;
+        else /* near the scene, beside the target */
+            org[axis] += side * 0.5;
+        /* off the axis a little, so that the rays cross the boxes' faces */
+        org[(axis + 1) % 3] += (next_u(&rng) - 0.5) * (kase == 3 ? 0.5 : b->float_origin);
+        double d[3] = {p[0] - org[0], p[1] - org[1], p[2] - org[2]};
+        if ((i / 72) % 3 == 1) /* one zero component (the ray misses or grazes) */
+            d[(axis + 2) % 3] = 0.0;
+        double len = (i / 216) % 3 == 0 ? 1e-90 : (i / 216) % 3 == 1 ? 1.0 : 1e90;
+        double norm = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (!(norm > 0.0))
+            continue;
+        bsp_ray r = {bsp_v3(org[0], org[1], org[2]),
+                     bsp_v3(d[0] / norm * len, d[1] / norm * len, d[2] / norm * len), 0.0,
+                     INFINITY};
+        bsp_hit ha, hn;
+        int xa = bsp_intersect(a, qa, &r, &ha), xn = bsp_intersect(nv, qn, &r, &hn);
+        rays++;
+        hits += xn;
+        if (xa != xn || (xn && (ha.prim != hn.prim || ha.t != hn.t)) ||
+            bsp_occluded(a, qa, &r) != bsp_occluded(nv, qn, &r)) {
+            bad++;
+            CHECK_MSG(0, "ray %d (case %d, length %g): bvh4 %d prim %u t %.17g, naive %d prim %u t %.17g",
+                      i, kase, len, xa, ha.prim, ha.t, xn, hn.prim, hn.t);
+        }
+    }
+    CHECK(bad == 0);
+    CHECK_MSG(hits > rays / 2, "%d hits of %d rays: the rays should mostly hit", hits, rays);
+    bsp_query_destroy(qa);
+    bsp_query_destroy(qn);
+    bsp_accel_destroy(nv);
     bsp_accel_destroy(a);
     bsp_scene_destroy(s);
 }

@@ -591,7 +591,9 @@ static bsp_ray face_ray(const bvh *b, bsp_box box)
     if (!b->nnodes)
         return r;
     uint32_t i = (uint32_t)(rnd() * b->nnodes) % b->nnodes;
-    const bvh_node n = bvh_get(b, i == 1 ? 0 : i); /* id 1 is unused */
+    bvh_node n = bvh_get(b, i == 1 && b->width == 2 ? 0 : i); /* id 1 is unused */
+    if (n.index == BVH_NONE) /* a quad's unused lane */
+        n = bvh_get(b, 0);
     unsigned axis = (unsigned)(rnd() * 3) % 3;
     r.org.v[axis] = rnd() < 0.5 ? (double)n.lo[axis] : (double)n.hi[axis];
     if (rnd() < 0.5)
@@ -623,7 +625,8 @@ static void check_exact_accel(const bsp_scene *s, const char *name, bsp_accel *c
     rng_state = seed;
     int bad = 0, hits = 0;
     for (int i = 0; i < nrays && bad < 5; i++) {
-        int is_bvh = bsp_accel_get_kind(acc[0]) == BSP_ACCEL_BVH;
+        int is_bvh = bsp_accel_get_kind(acc[0]) == BSP_ACCEL_BVH ||
+                     bsp_accel_get_kind(acc[0]) == BSP_ACCEL_BVH4;
         bsp_ray r = rnd() >= 0.1 ? random_ray(box)
                     : is_bvh     ? face_ray(acc[0]->impl, box)
                                  : plane_ray(tree_of(acc[0]), box);
@@ -1057,6 +1060,8 @@ TEST(sah_exact_stress_non_planar_polygons)
     bsp_build_options_defaults(&bvh_opts);
     bvh_opts.kind = BSP_ACCEL_BVH;
     check_exact_opts(s, "non-planar polygons, bvh", bvh_opts, ray_count(20000), 408);
+    bvh_opts.kind = BSP_ACCEL_BVH4;
+    check_exact_opts(s, "non-planar polygons, bvh4", bvh_opts, ray_count(20000), 409);
     bsp_scene_destroy(s);
 }
 
@@ -1388,19 +1393,21 @@ TEST(kd_exact_subnormal_directions)
         add_sphere(s, v3_scale(c, -1.0), rnd_in(0.05, 0.6)); /* symmetric bounds */
     }
     add_tri(s, bsp_v3(0, -3, -3), bsp_v3(0, 3, -3), bsp_v3(0, 0, 3)); /* in the plane x = 0 */
-    bsp_build_options kinds[3];
+    bsp_build_options kinds[4];
     bsp_build_options_defaults(&kinds[0]);
     kinds[0].kind = BSP_ACCEL_KAPLAN;
     kinds[1] = sah_options();
     bsp_build_options_defaults(&kinds[2]);
     kinds[2].kind = BSP_ACCEL_BVH; /* 1 / d infinite in its slab tests */
+    bsp_build_options_defaults(&kinds[3]);
+    kinds[3].kind = BSP_ACCEL_BVH4; /* likewise, in float lanes */
     bsp_build_options nv;
     bsp_build_options_defaults(&nv);
     nv.kind = BSP_ACCEL_NAIVE;
     bsp_accel *naive = build(s, &nv);
     bsp_query *qn = bsp_query_create(naive);
     int mismatches = 0, hits = 0;
-    for (int kd = 0; kd < 3; kd++) {
+    for (int kd = 0; kd < 4; kd++) {
         bsp_accel *acc = build(s, &kinds[kd]);
         bsp_query *q = bsp_query_create(acc);
         for (int i = 0; i < 20000; i++) {

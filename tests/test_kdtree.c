@@ -37,8 +37,8 @@ static double rnd_in(double lo, double hi)
 
 /* Split planes of a kd accel (interior nodes), for rays starting on them. */
 typedef struct plane_list {
-    unsigned axis[4096];
-    double value[4096];
+    unsigned axis[4608];
+    double value[4608];
     int n;
 } plane_list;
 
@@ -59,10 +59,13 @@ static void collect_planes(const bsp_accel *a, plane_list *pl, int limit)
                 }
         return;
     }
-    if (bsp_accel_get_kind(a) == BSP_ACCEL_BVH) {
+    if (bsp_accel_get_kind(a) == BSP_ACCEL_BVH || bsp_accel_get_kind(a) == BSP_ACCEL_BVH4) {
         const bvh *b = a->impl; /* its boxes' faces */
-        for (uint32_t i = 0; i < b->nnodes && pl->n + 6 <= limit; i += 1 + (i == 0)) {
-            const bvh_node n = bvh_get(b, i); /* id 1 is unused */
+        for (uint32_t i = 0; i < b->nnodes && pl->n + 6 <= limit;
+             i += 1 + (i == 0 && b->width == 2)) { /* id 1 is unused */
+            const bvh_node n = bvh_get(b, i);
+            if (n.index == BVH_NONE)
+                continue; /* a quad's unused lane */
             for (unsigned k = 0; k < 3; k++) {
                 pl->axis[pl->n] = k;
                 pl->value[pl->n++] = n.lo[k];
@@ -245,9 +248,10 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
             collect_planes(acc[v], &g.planes, 2048);
             break;
         }
-    static const bsp_accel_kind regular[] = {BSP_ACCEL_GRID, BSP_ACCEL_OCTREE, BSP_ACCEL_BVH};
-    static const int upto[] = {3072, 3584, 4096};
-    for (int k = 0; k < 3; k++)
+    static const bsp_accel_kind regular[] = {BSP_ACCEL_GRID, BSP_ACCEL_OCTREE, BSP_ACCEL_BVH,
+                                             BSP_ACCEL_BVH4};
+    static const int upto[] = {3072, 3584, 4096, 4608};
+    for (int k = 0; k < 4; k++)
         for (int v = nv - 1; v >= 0; v--)
             if (bsp_accel_get_kind(acc[v]) == regular[k]) {
                 collect_planes(acc[v], &g.planes, upto[k]);

@@ -387,7 +387,7 @@ void json_real(FILE *f, double x)
 int kind_builds_in_parallel(bsp_accel_kind k)
 {
     return k != BSP_ACCEL_NAIVE && k != BSP_ACCEL_KAPLAN && k != BSP_ACCEL_GRID &&
-           k != BSP_ACCEL_OCTREE && k != BSP_ACCEL_BVH;
+           k != BSP_ACCEL_OCTREE && k != BSP_ACCEL_BVH && k != BSP_ACCEL_BVH4;
 }
 
 void tree_stats_json(FILE *f, const char *indent, const bsp_tree_stats *t, bsp_accel_kind kind)
@@ -683,16 +683,18 @@ const char build_args_help[] =
     "  --accel METHOD     acceleration method: sah (default), sah-per, sah-par, sah-mixed,\n"
     "                     kaplan, grid (a uniform grid), octree (--octree-split), bvh\n"
     "                     (a binned-SAH bounding volume hierarchy, to compare with),\n"
+    "                     bvh4 (that BVH with four children per node, float SIMD tests),\n"
     "                     naive (sah-per/-par/-mixed build for the camera's rays); also\n"
     "                     octree-cost, grid-bounds and grid-rec (the octree with\n"
     "                     --octree-split cost, the grid with --grid-assign bounds, the\n"
     "                     recursive grid of --grid-levels 2)\n"
     "  --mailbox on|off   test each primitive at most once per ray (default on)\n"
     "  --max-depth N      kd-tree: deepest leaf (default kaplan 18, sah round(8 + 1.3 log2 N));\n"
-    "                     octree: its levels, at most 21 (default: the least d, 8^d >= 8 N)\n"
+    "                     octree: its levels, at most 21 (default: the least d, 8^d >= 8 N);\n"
+    "                     bvh, bvh4: the binary build's levels, at most 60 (the default)\n"
     "  --leaf-size N      kd-tree: a node of at most N primitives is a leaf (default kaplan\n"
     "                     2, sah 1: the cost decides, octree 1); the paper: --max-depth 18\n"
-    "                     --leaf-size 2\n"
+    "                     --leaf-size 2; bvh, bvh4: the most a leaf holds (default 8)\n"
     "  --split-to-limits  sah family: split until --max-depth or --leaf-size ends it, even\n"
     "                     where the cost model would make a leaf (the paper's criteria)\n"
     "  --mixed-share F    sah-mixed: share of primary rays among all rays, in (0, 1]\n"

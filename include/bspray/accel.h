@@ -58,6 +58,9 @@ typedef enum bsp_accel_kind {
                             (default and at most 60) bound its leaves, which may
                             exceed max_leaf_prims only where their centroids
                             coincide; the mailbox does not apply */
+    BSP_ACCEL_BVH4,      /* the same BVH collapsed to four children per node (Embree's
+                            layout), whose four boxes a ray tests at once in float
+                            SIMD lanes; exact like every structure here */
     BSP_ACCEL_KIND_COUNT
 } bsp_accel_kind;
 

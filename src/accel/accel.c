@@ -14,7 +14,7 @@
 #include "accel/kd_tree.h"
 
 static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {
-    "naive", "kaplan", "sah", "sah-per", "sah-par", "sah-mixed", "grid", "octree", "bvh"};
+    "naive", "kaplan", "sah", "sah-per", "sah-par", "sah-mixed", "grid", "octree", "bvh", "bvh4"};
 
 size_t accel_max_bytes(const bsp_build_options *o)
 {
@@ -101,6 +101,7 @@ bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts
         st = grid_build(a, err);
         break;
     case BSP_ACCEL_BVH:
+    case BSP_ACCEL_BVH4:
         st = bvh_build(a, err);
         break;
     default:
@@ -160,7 +161,7 @@ void bsp_accel_tree_stats(const bsp_accel *a, bsp_tree_stats *st)
         grid_stats(a->impl, st);
         return;
     }
-    if (a->opts.kind == BSP_ACCEL_BVH) {
+    if (a->opts.kind == BSP_ACCEL_BVH || a->opts.kind == BSP_ACCEL_BVH4) {
         bvh_stats(a->impl, a->scene, st);
         return;
     }
@@ -175,7 +176,7 @@ bsp_status bsp_accel_check(const bsp_accel *a, bsp_error *err)
         return BSP_OK;
     if (a->opts.kind == BSP_ACCEL_GRID)
         return grid_check(a->impl, a->scene, err);
-    if (a->opts.kind == BSP_ACCEL_BVH)
+    if (a->opts.kind == BSP_ACCEL_BVH || a->opts.kind == BSP_ACCEL_BVH4)
         return bvh_check(a->impl, a->scene, err);
     return kd_tree_check(a->impl, a->scene, err);
 }
@@ -188,7 +189,7 @@ bsp_status bsp_accel_visit_cells(const bsp_accel *a, int max_depth,
         return BSP_OK;
     if (a->opts.kind == BSP_ACCEL_GRID)
         return grid_visit(a->impl, max_depth, visit, ctx);
-    if (a->opts.kind == BSP_ACCEL_BVH)
+    if (a->opts.kind == BSP_ACCEL_BVH || a->opts.kind == BSP_ACCEL_BVH4)
         return bvh_visit(a->impl, max_depth, visit, ctx);
     return kd_tree_visit(a->impl, max_depth, visit, ctx, err);
 }

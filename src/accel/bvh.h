@@ -15,6 +15,16 @@
  * leaf is `count` records from `index`. Every live primitive is in exactly
  * one leaf: no mailbox is needed, and none is used.
  *
+ * Four-wide (`--accel bvh4`, width 4): the same binary build, then each
+ * node takes up to four descendants as its children (the interior child of
+ * the largest surface area opened first, Embree's collapse) in a 128-byte
+ * quad (bvh_quad) whose four boxes a ray tests at once in SSE's four float
+ * lanes. The root is kept apart as before; child c of quad q is node id
+ * 1 + 4q + c, an interior node's `index` is its quad, and the lanes a quad
+ * does not use hold index BVH_NONE, meta 0 and the box +inf..-inf on every
+ * axis (its entry is +inf and its exit -inf for every ray: no 0 x inf or
+ * inf - inf arises with a finite origin).
+ *
  * Exactness invariant: a node's box contains the bounds of every primitive
  * below it grown by `pad` (KD_PAD_REL times the scene scale: four times the
  * distance from its shape within which the kernels accept a hit), so every
@@ -25,6 +35,15 @@
  * in [tmin, best t], ties included, and testing every such node's leaves
  * with tmax = best t and the lower index winning at equal t gives the naive
  * method's answer. Rays outside the domain take the naive loop.
+ *
+ * The four-wide tests run in float (bvh4_traverse.c), whose rounding is far
+ * coarser, so that tree's pad is larger, BVH4_PAD_REL M (M the largest
+ * |coordinate| of the scene's bounds; the kd-trees' pad if that is more),
+ * and its float tests serve the origins with every |o_k| <= 2^19 pad - M
+ * (`float_origin`; other rays of the domain take the same walk with double
+ * tests): there a computed slab t is the exact t of a face moved by at most
+ * 2^-22 (|face| + |o_k|) (1 + 2^-20) <= 2^-22 2^19 pad (1 + 2^-20), about
+ * pad / 8, far inside the 3/4 pad by which hits clear the box.
  */
 #ifndef BSPRAY_ACCEL_BVH_H
 #define BSPRAY_ACCEL_BVH_H
@@ -46,6 +65,13 @@
 #define BVH_TRAVERSAL_COST 2.0
 /* Centroid bins per axis of the binned SAH. */
 #define BVH_BINS 16
+/* The four-wide tree's bounds padding: 2^-14 M, M the largest |coordinate|
+ * of the scene's bounds (at least the kd-trees' pad), and the largest |o_k|
+ * its float slab tests take: 2^19 pads less M (see above). */
+#define BVH4_PAD_REL (1.0 / 16384.0)
+#define BVH4_FLOAT_ORIGIN_PADS 524288.0
+/* A quad's unused lane. */
+#define BVH_NONE UINT32_MAX
 
 typedef struct bvh_node {
     float lo[3], hi[3]; /* the box, rounded outward from the padded doubles */
@@ -61,6 +87,15 @@ typedef struct bvh_pair {
 
 _Static_assert(sizeof(bvh_pair) == 64, "a BVH pair is one 64-byte line");
 
+/* Up to four children of one node (width 4): child c's box is
+ * lo[k][c]..hi[k][c] on axis k; the children in use come first. */
+typedef struct bvh_quad {
+    float lo[3][4], hi[3][4];
+    uint32_t index[4], meta[4]; /* as bvh_node's; unused: BVH_NONE, 0 */
+} bvh_quad;
+
+_Static_assert(sizeof(bvh_quad) == 128, "a BVH quad is two 64-byte lines");
+
 #define BVH_COUNT(n) ((n)->meta >> 2)
 #define BVH_AXIS(n) ((n)->meta & 3u)
 /* The most primitives one leaf may count (meta's 30 bits). */
@@ -68,23 +103,40 @@ _Static_assert(sizeof(bvh_pair) == 64, "a BVH pair is one 64-byte line");
 
 typedef struct bvh {
     bvh_node root;
-    bvh_pair *pairs; /* 64-byte aligned, inside pairs_block */
-    void *pairs_block;
-    uint32_t nnodes; /* node ids in use + 1: 0, no live primitive; else 2 + 2 x pairs */
+    unsigned width;  /* 2: the nodes lie in pairs; 4: in quads */
+    bvh_pair *pairs; /* width 2: 64-byte aligned, inside nodes_block */
+    bvh_quad *quads; /* width 4: likewise */
+    void *nodes_block;
+    /* node ids in use + 1: 0, no live primitive; else 2 + 2 x pairs (id 1
+     * unused), or 1 + 4 x quads (their unused lanes included) */
+    uint32_t nnodes;
     kd_local *rec;  /* nrec records in leaf order */
     uint32_t nrec;
-    double pad;     /* the bounds padding (KD_PAD_REL x scene scale) */
+    double pad;     /* the bounds padding (KD_PAD_REL or BVH4_PAD_REL x scene scale) */
+    double float_origin; /* width 4: the float tests take |o_k| up to this (< 0: none) */
     bsp_sah_costs costs; /* the build's cost model: C_trav (traversal) and T_i by kind */
 } bvh;
 
-/* Node ID of T (0 the root, 2 + 2p + c child c of pair p). */
+/* Node ID of T (0 the root; width 2: 2 + 2p + c child c of pair p; width
+ * 4: 1 + 4q + c child c of quad q). */
 static inline bvh_node bvh_get(const bvh *t, uint32_t id)
 {
     if (id == 0)
         return t->root;
+    bvh_node n;
+    if (t->width == 4) {
+        const bvh_quad *q = &t->quads[(id - 1) >> 2];
+        unsigned c = (id - 1) & 3u;
+        for (unsigned k = 0; k < 3; k++) {
+            n.lo[k] = q->lo[k][c];
+            n.hi[k] = q->hi[k][c];
+        }
+        n.index = q->index[c];
+        n.meta = q->meta[c];
+        return n;
+    }
     const bvh_pair *p = &t->pairs[(id - 2) >> 1];
     unsigned c = id & 1u;
-    bvh_node n;
     for (unsigned k = 0; k < 3; k++) {
         n.lo[k] = p->lo[k][c];
         n.hi[k] = p->hi[k][c];
@@ -92,6 +144,23 @@ static inline bvh_node bvh_get(const bvh *t, uint32_t id)
     n.index = p->index[c];
     n.meta = p->meta[c];
     return n;
+}
+
+/* The ids of interior node N's children in IDS (left to right), and how
+ * many it has: 2, or (width 4) the lanes of its quad in use. */
+static inline unsigned bvh_children(const bvh *t, const bvh_node *n, uint32_t ids[4])
+{
+    if (t->width != 4) {
+        ids[0] = n->index;
+        ids[1] = n->index + 1;
+        return 2;
+    }
+    unsigned c = 0;
+    while (c < 4 && t->quads[n->index].index[c] != BVH_NONE) {
+        ids[c] = 1 + 4 * n->index + c;
+        c++;
+    }
+    return c;
 }
 
 /* Builds A's BVH over A->scene (options A->opts): sets A's ops and impl.
@@ -116,10 +185,13 @@ HIDDEN bsp_status bvh_check(const bvh *b, const bsp_scene *scene, bsp_error *err
 HIDDEN bsp_status bvh_visit(const bvh *b, int max_depth,
                             int (*visit)(const bsp_cell_info *cell, void *ctx), void *ctx);
 
-/* The queries (bvh_traverse.c). */
+/* The queries (bvh_traverse.c; width 4: bvh4_traverse.c). */
 HIDDEN int bvh_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
                          bsp_hit *hit);
 HIDDEN int bvh_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from);
+HIDDEN int bvh4_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
+                          bsp_hit *hit);
+HIDDEN int bvh4_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from);
 
 HIDDEN void bvh_destroy(void *impl);
 

@@ -11,7 +11,8 @@
  * (bsp_build_options.max_leaf_prims, default BVH_LEAF_MAX). Centroids that
  * all coincide are halved in index order; a node at max_depth (default and
  * at most BVH_MAX_DEPTH) is a leaf. One thread; O(N log N) for a tree of
- * logarithmic depth. Layout and exactness: bvh.h.
+ * logarithmic depth. The four-wide tree (`--accel bvh4`) is this binary
+ * tree collapsed (collapse_node). Layout and exactness: bvh.h.
  */
 #include <math.h>
 #include <stdint.h>
@@ -205,17 +206,106 @@ static void build_node(builder *b, uint32_t me, uint32_t begin, uint32_t end, in
     build_node(b, pair + 1, mid, end, depth + 1);
 }
 
+/* The children of binary node N (interior) that node's quad takes, in
+ * KIDS, left to right: its two, then, while fewer than four, the interior
+ * one of the largest surface area replaced by its two (Embree's collapse).
+ * Returns how many. */
+static unsigned quad_children(const bvh *bin, const bvh_node *n, bvh_node kids[4])
+{
+    unsigned m = 2;
+    kids[0] = bvh_get(bin, n->index);
+    kids[1] = bvh_get(bin, n->index + 1);
+    while (m < 4) {
+        int open = -1;
+        double most = -1.0;
+        for (unsigned i = 0; i < m; i++) {
+            if (BVH_COUNT(&kids[i]))
+                continue;
+            bsp_box box;
+            for (unsigned k = 0; k < 3; k++) {
+                box.lo.v[k] = kids[i].lo[k];
+                box.hi.v[k] = kids[i].hi[k];
+            }
+            double area = kd_surface_area(&box);
+            if (area > most) {
+                most = area;
+                open = (int)i;
+            }
+        }
+        if (open < 0)
+            break;
+        const bvh_node o = kids[open];
+        memmove(&kids[open + 2], &kids[open + 1], (m - (unsigned)open - 1) * sizeof *kids);
+        kids[open] = bvh_get(bin, o.index);
+        kids[open + 1] = bvh_get(bin, o.index + 1);
+        m++;
+    }
+    return m;
+}
+
+/* Collapses the subtree of binary node N (interior) of BIN into quads from
+ * *NQ on, depth first, a quad before its children's (QUADS NULL: counts
+ * them only); returns N's quad. The leaves keep their left-to-right order,
+ * so the records stay in leaf order. */
+static uint32_t collapse_node(const bvh *bin, const bvh_node *n, bvh_quad *quads, uint32_t *nq)
+{
+    bvh_node kids[4];
+    unsigned m = quad_children(bin, n, kids);
+    uint32_t me = (*nq)++;
+    bvh_quad *q = quads ? &quads[me] : NULL;
+    for (unsigned c = 0; q && c < 4; c++) {
+        for (unsigned k = 0; k < 3; k++) {
+            q->lo[k][c] = c < m ? kids[c].lo[k] : INFINITY;
+            q->hi[k][c] = c < m ? kids[c].hi[k] : -INFINITY;
+        }
+        q->index[c] = c < m ? kids[c].index : BVH_NONE;
+        q->meta[c] = c < m ? kids[c].meta : 0;
+    }
+    for (unsigned c = 0; c < m; c++) {
+        if (BVH_COUNT(&kids[c]))
+            continue;
+        uint32_t child = collapse_node(bin, &kids[c], quads, nq);
+        if (q)
+            q->index[c] = child;
+    }
+    return me;
+}
+
+/* Turns T's binary tree into its four-wide form (bvh.h): BSP_OK, or
+ * BSP_ERR_NOMEM with T unchanged. */
+static bsp_status collapse(bvh *t)
+{
+    uint32_t nq = 0;
+    if (t->nnodes && !BVH_COUNT(&t->root))
+        collapse_node(t, &t->root, NULL, &nq);
+    void *block = bigmem_malloc((nq ? nq : 1) * sizeof(bvh_quad) + 63);
+    if (!block)
+        return BSP_ERR_NOMEM;
+    bvh_quad *quads = (bvh_quad *)(((uintptr_t)block + 63) & ~(uintptr_t)63);
+    uint32_t filled = 0;
+    if (nq)
+        t->root.index = collapse_node(t, &t->root, quads, &filled);
+    free(t->nodes_block);
+    t->nodes_block = block;
+    t->pairs = NULL;
+    t->quads = quads;
+    t->width = 4;
+    t->nnodes = t->nnodes ? 1 + 4 * nq : 0;
+    return BSP_OK;
+}
+
 void bvh_destroy(void *impl)
 {
     bvh *t = impl;
     if (!t)
         return;
-    free(t->pairs_block);
+    free(t->nodes_block);
     free(t->rec);
     free(t);
 }
 
 static const accel_ops bvh_ops = {bvh_intersect, bvh_occluded, bvh_destroy};
+static const accel_ops bvh4_ops = {bvh4_intersect, bvh4_occluded, bvh_destroy};
 
 static bsp_status bvh_oom(bsp_error *err)
 {
@@ -233,8 +323,11 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
         return error_set(err, BSP_ERR_LIMIT, NULL, 0,
                          "a BVH holds at most %u primitives, the scene has %zu",
                          (unsigned)BVH_MAX_PRIMS - 1, n);
+    const int wide = a->opts.kind == BSP_ACCEL_BVH4;
     const size_t npairs = n ? n - 1 : 0;
-    const size_t bytes = npairs * sizeof(bvh_pair) + n * sizeof(kd_local);
+    /* the four-wide tree: at most a quad per pair, made while the pairs live */
+    const size_t bytes =
+        npairs * (sizeof(bvh_pair) + (wide ? sizeof(bvh_quad) : 0)) + n * sizeof(kd_local);
     const size_t limit = accel_max_bytes(&a->opts);
     if (limit && bytes > limit)
         return error_set(err, BSP_ERR_LIMIT, NULL, 0,
@@ -247,7 +340,21 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
     bvh *t = calloc(1, sizeof *t);
     if (!t)
         return bvh_oom(err);
+    t->width = 2;
     t->pad = KD_PAD_REL * scene_scale(s);
+    t->float_origin = -1.0; /* no float tests */
+    if (wide) {
+        /* the float tests' error grows with |face| + |o|: the pad with the
+         * largest coordinate M of the scene, and the origins they take
+         * within 2^19 pads less M (bvh.h); no float tests where M nears
+         * the float range */
+        double m = 0.0;
+        for (unsigned k = 0; k < 3 && !box_is_empty(s->bounds); k++)
+            m = fmax(m, fmax(fabs(s->bounds.lo.v[k]), fabs(s->bounds.hi.v[k])));
+        t->pad = fmax(t->pad, BVH4_PAD_REL * m);
+        if (m <= 1e30)
+            t->float_origin = BVH4_FLOAT_ORIGIN_PADS * t->pad - m;
+    }
     t->costs = cm.c;
     builder b = {0};
     b.ctrav = cm.c.traversal;
@@ -262,9 +369,9 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
     double *cost = bigmem_malloc((np ? np : 1) * sizeof *cost);
     b.order = malloc((n ? n : 1) * sizeof *b.order);
     /* 63 bytes more, to start the array on a line */
-    t->pairs_block = bigmem_malloc((npairs ? npairs : 1) * sizeof *t->pairs + 63);
-    if (t->pairs_block)
-        t->pairs = (bvh_pair *)(((uintptr_t)t->pairs_block + 63) & ~(uintptr_t)63);
+    t->nodes_block = bigmem_malloc((npairs ? npairs : 1) * sizeof *t->pairs + 63);
+    if (t->nodes_block)
+        t->pairs = (bvh_pair *)(((uintptr_t)t->nodes_block + 63) & ~(uintptr_t)63);
     t->rec = bigmem_malloc((n ? n : 1) * sizeof *t->rec);
     bsp_status st = BSP_OK;
     if (!bounds || !cost || !b.order || !t->pairs || !t->rec) {
@@ -290,6 +397,8 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
     for (uint32_t i = 0; i < (uint32_t)n; i++)
         kd_local_fill(&t->rec[i], s, b.order[i]);
     t->nrec = (uint32_t)n;
+    if (wide && collapse(t) != BSP_OK)
+        st = bvh_oom(err);
 done:
     free(bounds);
     free(cost);
@@ -298,7 +407,7 @@ done:
         bvh_destroy(t);
         return st;
     }
-    a->ops = &bvh_ops;
+    a->ops = wide ? &bvh4_ops : &bvh_ops;
     a->impl = t;
     return BSP_OK;
 }

@@ -24,7 +24,7 @@ static bsp_box node_box(const bvh_node *n)
 /* What a walk's step says: go into the node's children, skip them, or stop. */
 enum { WALK_STOP = -1, WALK_SKIP = 0, WALK_DOWN = 1 };
 
-/* Walks B (not empty) depth first, a node before its children, left before
+/* Walks B (not empty) depth first, a node before its children, left to
  * right, calling STEP with each node's id, the node and its depth; STEP's
  * answer for an interior node decides whether its children follow. STEP must
  * not send the walk below BVH_MAX_DEPTH (the built trees do not go there;
@@ -36,7 +36,7 @@ static void walk_nodes(const bvh *b, int (*step)(void *ctx, uint32_t id, const b
     struct {
         uint32_t id;
         int depth;
-    } stack[BVH_MAX_DEPTH + 2];
+    } stack[3 * BVH_MAX_DEPTH + 4]; /* at most three pushed per level, beside the one taken */
     unsigned sp = 0;
     stack[sp].id = 0;
     stack[sp++].depth = 0;
@@ -49,10 +49,11 @@ static void walk_nodes(const bvh *b, int (*step)(void *ctx, uint32_t id, const b
         if (go == WALK_STOP)
             return;
         if (go == WALK_DOWN && !BVH_COUNT(&n)) {
-            stack[sp].id = n.index + 1; /* the right child under the left */
-            stack[sp++].depth = depth + 1;
-            stack[sp].id = n.index;
-            stack[sp++].depth = depth + 1;
+            uint32_t ids[4];
+            for (unsigned c = bvh_children(b, &n, ids); c-- > 0;) { /* the right under the left */
+                stack[sp].id = ids[c];
+                stack[sp++].depth = depth + 1;
+            }
         }
     }
 }
@@ -94,7 +95,10 @@ static int stats_step(void *ctx, uint32_t id, const bvh_node *n, int depth)
 void bvh_stats(const bvh *b, const bsp_scene *scene, bsp_tree_stats *st)
 {
     memset(st, 0, sizeof *st);
-    st->bytes = b->nnodes ? sizeof(bvh_node) + (uint64_t)(b->nnodes - 2) / 2 * sizeof(bvh_pair) : 0;
+    if (b->width == 4)
+        st->bytes = b->nnodes ? sizeof(bvh_node) + (uint64_t)(b->nnodes - 1) / 4 * sizeof(bvh_quad) : 0;
+    else
+        st->bytes = b->nnodes ? sizeof(bvh_node) + (uint64_t)(b->nnodes - 2) / 2 * sizeof(bvh_pair) : 0;
     st->trace_bytes = (uint64_t)b->nrec * sizeof(kd_local);
     uint64_t h = FNV1A_BASIS;
     for (uint32_t i = 0; i < b->nrec; i++)
@@ -107,7 +111,7 @@ void bvh_stats(const bvh *b, const bsp_scene *scene, bsp_tree_stats *st)
     stats_walk w = {b, scene, st, 1.0 / kd_surface_area(&root), 0.0, 0.0, 0.0};
     walk_nodes(b, stats_step, &w);
     for (uint32_t i = 0; i < b->nnodes; i++) {
-        if (i == 1)
+        if (i == 1 && b->width == 2)
             continue; /* unused */
         const bvh_node n = bvh_get(b, i);
         uint32_t words[8];
@@ -136,7 +140,7 @@ typedef struct check_walk {
     bsp_error *err;
     bsp_status st;
     unsigned char *seen;              /* per primitive: listed already */
-    uint32_t next_rec, visited;
+    uint32_t next_rec, visited, unused; /* unused: quads' lanes not in use */
     bsp_box path[BVH_MAX_DEPTH + 1];  /* the boxes from the root to the node */
 } check_walk;
 
@@ -153,6 +157,31 @@ static int check_step(void *ctx, uint32_t id, const bvh_node *n, int depth)
     w->visited++;
     w->path[depth] = node_box(n);
     uint32_t cnt = BVH_COUNT(n);
+    if (!cnt && b->width == 4) {
+        /* quads after the node's own: each reached once, no cycle; two to
+         * four lanes in use, first, the others empty (+inf..-inf) */
+        uint32_t nq = (b->nnodes - 1) / 4, own = id ? (id - 1) / 4 : 0;
+        int bad = depth >= BVH_MAX_DEPTH || n->index >= nq || (id && n->index <= own) ||
+                  BVH_AXIS(n) > 2;
+        unsigned used = 0;
+        for (unsigned c = 0; !bad && c < 4; c++) {
+            const bvh_quad *q = &b->quads[n->index];
+            if (q->index[c] != BVH_NONE) {
+                bad |= used != c;
+                used++;
+                continue;
+            }
+            bad |= q->meta[c] != 0;
+            for (unsigned k = 0; k < 3; k++)
+                bad |= !(q->lo[k][c] == INFINITY && q->hi[k][c] == -INFINITY);
+        }
+        if (bad || used < 2)
+            return check_fail(w, error_set(w->err, BSP_ERR_INVALID, NULL, 0,
+                                           "BVH node %u: quad %u of %u (%u children), depth %d",
+                                           id, n->index, nq, used, depth));
+        w->unused += 4 - used;
+        return WALK_DOWN;
+    }
     if (!cnt) {
         /* pairs at even indices after the node: each reached once, no cycle */
         if (depth >= BVH_MAX_DEPTH || n->index % 2 || n->index <= id ||
@@ -208,8 +237,9 @@ bsp_status bvh_check(const bvh *b, const bsp_scene *scene, bsp_error *err)
     if (!w.seen)
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory while checking the BVH");
     walk_nodes(b, check_step, &w);
-    /* every node but the unused slot 1 */
-    if (w.st == BSP_OK && (w.next_rec != b->nrec || w.visited + 1 != b->nnodes))
+    /* every node but the unused slot 1 (width 2) or the quads' unused lanes */
+    uint32_t unused = b->width == 4 ? w.unused : 1;
+    if (w.st == BSP_OK && (w.next_rec != b->nrec || w.visited + unused != b->nnodes))
         w.st = error_set(err, BSP_ERR_INVALID, NULL, 0,
                          "BVH: %u of %u records and %u of %u nodes reached", w.next_rec,
                          b->nrec, w.visited, b->nnodes);
@@ -238,15 +268,19 @@ static int visit_step(void *ctx, uint32_t id, const bvh_node *n, int depth)
     if (cnt) {
         c.refs = cnt;
     } else {
+        uint32_t ids[4];
+        bvh_children(w->b, n, ids);
         c.axis = BVH_AXIS(n);
-        c.split = bvh_get(w->b, n->index + 1).lo[c.axis];
+        c.split = bvh_get(w->b, ids[1]).lo[c.axis];
         /* the references below: the records from the leftmost leaf's
          * first to the rightmost leaf's last, in record order */
         bvh_node l = *n, r = *n;
-        while (!BVH_COUNT(&l))
-            l = bvh_get(w->b, l.index);
+        while (!BVH_COUNT(&l)) {
+            bvh_children(w->b, &l, ids);
+            l = bvh_get(w->b, ids[0]);
+        }
         while (!BVH_COUNT(&r))
-            r = bvh_get(w->b, r.index + 1);
+            r = bvh_get(w->b, ids[bvh_children(w->b, &r, ids) - 1]);
         c.refs = (uint64_t)r.index + BVH_COUNT(&r) - l.index;
     }
     int go = w->visit(&c, w->ctx);

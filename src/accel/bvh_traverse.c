@@ -30,6 +30,7 @@
 #endif
 
 #include "accel/bvh.h"
+#include "accel/bvh_query.h"
 
 typedef struct bvh_ray {
     double o[3], inv[3];
@@ -102,13 +103,6 @@ static inline void bvh_ray_init(bvh_ray *r, const bsp_ray *ray)
         r->o[k] = ray->org.v[k];
         r->inv[k] = 1.0 / ray->dir.v[k];
     }
-}
-
-/* 1 when RAY lies in S's precision domain (scene_internal.h). */
-static inline int bvh_in_domain(const bsp_scene *s, const bsp_ray *ray)
-{
-    const double *d = ray->dir.v;
-    return scene_ray_in_domain(s, ray->org.v, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
 }
 
 /* A walk of the tree: the nodes still to visit (ids, bvh.h), each with its
@@ -187,44 +181,6 @@ walk(const bvh *t, const bvh_ray *r, double tmin, const double *tmax, bvh_walk *
     }
 }
 
-/* A query's state, for its leaf steps. */
-typedef struct query_state {
-    const bsp_scene *s;
-    const kd_local *rec;
-    isect_ray r;
-    uint32_t from, best_p;
-    double tmax; /* closest hit: follows the best hit; t never depends on it */
-    scene_isect_hit best;
-    uint64_t leaves, refs, tests;
-} query_state;
-
-/* Tests the CNT records from FIRST for the query C, closest hit or ANY hit;
- * 1 when an any-hit query found one. */
-static inline __attribute__((always_inline)) int leaf_records(query_state *c, uint32_t first,
-                                                              uint32_t cnt, int any)
-{
-    scene_isect_hit h;
-    c->leaves++;
-    c->refs += cnt;
-    for (const kd_local *L = c->rec + first, *end = L + cnt; L != end; L++) {
-        if (L->prim == c->from)
-            continue;
-        c->tests++;
-        if (!kd_local_isect(c->s, L, &c->r, c->tmax, &h))
-            continue;
-        if (any)
-            return 1;
-        /* every hit found is at most tmax: better when its t is smaller or,
-         * at equal t, its index lower (the naive order) */
-        if (h.t < c->best.t || L->prim < c->best_p) {
-            c->best = h;
-            c->best_p = L->prim;
-            c->tmax = h.t;
-        }
-    }
-    return 0;
-}
-
 static inline __attribute__((always_inline)) int closest_leaf(void *ctx, uint32_t first,
                                                               uint32_t cnt)
 {
@@ -237,51 +193,35 @@ static inline __attribute__((always_inline)) int any_leaf(void *ctx, uint32_t fi
     return leaf_records(ctx, first, cnt, 1);
 }
 
-int bvh_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
-                  bsp_hit *hit)
+/* Closest hit into HIT, or occlusion when HIT is NULL. */
+static inline __attribute__((always_inline)) int query2(const bsp_accel *a, bsp_query *q,
+                                                        const bsp_ray *ray, uint32_t from,
+                                                        bsp_hit *hit)
 {
+    int out;
+    if (query_without_walk(a, q, ray, from, hit, &out))
+        return out;
     const bvh *t = a->impl;
-    const bsp_scene *s = a->scene;
-    hit->prim = BSP_NO_PRIM;
-    if (__builtin_expect(!bvh_in_domain(s, ray), 0))
-        return naive_scene_intersect(s, q, ray, from, hit);
-    if (!t->nnodes)
-        return 0;
     bvh_ray br;
     bvh_ray_init(&br, ray);
-    query_state c = {.s = s, .rec = t->rec, .from = from, .best_p = BSP_NO_PRIM,
-                     .tmax = ray->tmax};
-    c.best = (scene_isect_hit){INFINITY, 0.0, 0.0, 1.0};
-    isect_ray_init(&c.r, ray, s->hit_tol); /* in the domain: checked */
+    query_state c;
+    query_start(&c, a->scene, t, ray, from);
     bvh_walk w;
     w.sp = 0;
     w.tested = 0;
-    walk(t, &br, ray->tmin, &c.tmax, &w, closest_leaf, &c);
-    /* interior: every box tested but the leaves entered; no empty leaves,
-     * no skips; mailbox hits = refs - tests = the left-out primitive */
-    query_count(q, w.tested - c.leaves, c.leaves, 0, c.leaves, c.refs, c.tests);
-    if (c.best_p == BSP_NO_PRIM)
-        return 0;
-    scene_hit_finish(&c.best, c.best_p, hit);
-    return 1;
+    int found = hit ? walk(t, &br, ray->tmin, &c.tmax, &w, closest_leaf, &c)
+                    : walk(t, &br, ray->tmin, &c.tmax, &w, any_leaf, &c);
+    int closest = query_finish(q, &c, w.tested, hit);
+    return hit ? closest : found;
+}
+
+int bvh_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
+                  bsp_hit *hit)
+{
+    return query2(a, q, ray, from, hit);
 }
 
 int bvh_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from)
 {
-    const bvh *t = a->impl;
-    const bsp_scene *s = a->scene;
-    if (__builtin_expect(!bvh_in_domain(s, ray), 0))
-        return naive_scene_occluded(s, q, ray, from);
-    if (!t->nnodes)
-        return 0;
-    bvh_ray br;
-    bvh_ray_init(&br, ray);
-    query_state c = {.s = s, .rec = t->rec, .from = from, .tmax = ray->tmax};
-    isect_ray_init(&c.r, ray, s->hit_tol);
-    bvh_walk w;
-    w.sp = 0;
-    w.tested = 0;
-    int found = walk(t, &br, ray->tmin, &c.tmax, &w, any_leaf, &c);
-    query_count(q, w.tested - c.leaves, c.leaves, 0, c.leaves, c.refs, c.tests);
-    return found;
+    return query2(a, q, ray, from, NULL);
 }

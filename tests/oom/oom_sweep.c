@@ -628,6 +628,7 @@ int main(int argc, char **argv)
         {"octree", BSP_ACCEL_OCTREE, BSP_OCTREE_CENTRE, 0, 0, 0},
         {"octree-cost", BSP_ACCEL_OCTREE, BSP_OCTREE_COST, 0, 0, 0},
         {"bvh", BSP_ACCEL_BVH, BSP_OCTREE_CENTRE, 0, 0, 0},
+        {"bvh4", BSP_ACCEL_BVH4, BSP_OCTREE_CENTRE, 0, 0, 0},
     };
     static bsp_ray rays[NRAYS];
     static bsp_hit ref[NRAYS];

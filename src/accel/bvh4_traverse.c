@@ -1,0 +1,315 @@
+/*
+ * bvh4_traverse.c — closest-hit and any-hit queries on the four-wide BVH
+ * (bvh.h, width 4). At a quad the ray's interval is clipped to its four
+ * boxes at once; of the boxes met, the nearest is entered (a leaf is
+ * tested) and the others are pushed with their entry t, farthest first. A
+ * popped node is skipped when its entry lies beyond the best hit found
+ * since: the entry computed is at most the t of any hit below it, so the
+ * skip loses no hit, ties included.
+ *
+ * Float tests (SSE, four lanes) serve the rays whose origin lies within
+ * t->float_origin on every axis (bvh.h: there a computed slab t is the
+ * exact t of a face moved by at most about a quarter of the pad, and hits
+ * lie 3/4 pad inside every box above them). Their direction is scaled by a
+ * power of two, 2^-shift, to a largest component in [1, 2): exact, so the
+ * scaled parameter t' = t 2^shift is exact too, and every t' a hit can
+ * have is far inside the float range. The ray's [tmin, best t] enters the
+ * tests as floats rounded outward. Other rays of the precision domain (and
+ * every ray where SSE is missing) take the same walk with double tests, as
+ * exact as the two-wide tree's; rays outside the domain, the naive loop.
+ *
+ * A box's near face on axis k is its low one when 1 / d_k >= 0 (d_k = +0
+ * included), else its high one: (near - o) / d_k <= (far - o) / d_k then,
+ * so no min or max is needed. A zero component gives +-inf, or NaN where the
+ * origin lies exactly on a face, where the ray's line cannot hold an
+ * accepted hit of the box (either answer is safe); an unused lane's box,
+ * +inf..-inf, always misses (entry +inf, exit -inf). Entries on the stack are floats rounded down (in t'
+ * units on the float path, t on the double one), compared with the best t
+ * rounded up.
+ *
+ * Counters: N_TS counts box tests, four per quad (one SIMD step, unused
+ * lanes included) and one for the root, as the two-wide tree counts two per
+ * pair; N_ETS the leaves entered; N_IT the primitives tested.
+ */
+#include <float.h>
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include "accel/bvh.h"
+#include "accel/bvh_query.h"
+
+/* The float after / before F (F finite; NaN stays). Inline: libm's
+ * nextafterf is a call, and the walk rounds after every leaf that hits. */
+static inline float float_step(float f, int up)
+{
+    if (f == 0.0f)
+        return up ? FLT_TRUE_MIN : -FLT_TRUE_MIN;
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    u += (f > 0.0f) == (up != 0) ? 1u : (uint32_t)-1; /* away from / towards 0 */
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+/* X rounded to a float towards -inf / +inf. */
+static inline float down_f(double x)
+{
+    float f = (float)x;
+    return (double)f > x ? float_step(f, 0) : f;
+}
+static inline float up_f(double x)
+{
+    float f = (float)x;
+    return (double)f < x ? float_step(f, 1) : f;
+}
+
+/* 2^E as a double, for E in [-1022, 1023]. */
+static inline double pow2(int e)
+{
+    uint64_t u = (uint64_t)(e + 1023) << 52;
+    double d;
+    memcpy(&d, &u, sizeof d);
+    return d;
+}
+
+typedef struct bvh4_ray {
+    double o[3], inv[3]; /* the double tests' (t units) */
+    unsigned near[3], far[3]; /* per axis, byte offsets in a quad of the near and far faces */
+    double scale;        /* the float tests' t' = t scale, scale = 2^shift (1: double tests) */
+#if defined(__SSE2__)
+    __m128 of[3], invf[3]; /* the float tests' origin and scaled 1 / d */
+#endif
+} bvh4_ray;
+
+/* T in the walk's units (t' = t SCALE, exact but where it underflows),
+ * rounded down / up to a float; a positive t never rounds up to 0. */
+static inline float t_down(double t, double scale)
+{
+    return down_f(t * scale);
+}
+static inline float t_up(double t, double scale)
+{
+    float f = up_f(t * scale);
+    return f == 0.0f && t > 0.0 ? FLT_TRUE_MIN : f;
+}
+
+/* Prepares R for RAY; 1 when the float tests may serve it. */
+static int bvh4_ray_init(bvh4_ray *r, const bvh *t, const bsp_ray *ray)
+{
+    const double *o = ray->org.v, *d = ray->dir.v;
+    double m = 0.0;
+    int fl = 1;
+    for (unsigned k = 0; k < 3; k++) {
+        r->o[k] = o[k];
+        r->inv[k] = 1.0 / d[k];
+        const unsigned lo = (unsigned)(offsetof(bvh_quad, lo) + k * sizeof(float[4]));
+        const unsigned hi = (unsigned)(offsetof(bvh_quad, hi) + k * sizeof(float[4]));
+        r->near[k] = signbit(r->inv[k]) ? hi : lo;
+        r->far[k] = signbit(r->inv[k]) ? lo : hi;
+        m = fmax(m, fabs(d[k]));
+        fl &= fabs(o[k]) <= t->float_origin;
+    }
+    r->scale = 1.0;
+#if defined(__SSE2__)
+    if (!fl)
+        return 0;
+    /* m = 2^shift x [1, 2) (m >= 1e-100 in the domain: a normal double),
+     * so d 2^-shift has its largest component in [1, 2) and t' = t 2^shift */
+    uint64_t bits;
+    memcpy(&bits, &m, sizeof bits);
+    r->scale = pow2((int)((bits >> 52) & 0x7ff) - 1023);
+    for (unsigned k = 0; k < 3; k++) {
+        r->of[k] = _mm_set1_ps((float)o[k]);
+        /* 1 / (d 2^-shift) rounded to float; +-inf for +-0 */
+        r->invf[k] = _mm_set1_ps((float)(r->inv[k] * r->scale));
+    }
+    return 1;
+#else
+    return 0;
+#endif
+}
+
+/* Which of quad Q's boxes R's interval [T0, T1] (walk units) meets, as a
+ * bit mask; E[c] is where it enters box c. */
+static inline __attribute__((always_inline)) unsigned
+quad_hit(const bvh_quad *q, const bvh4_ray *r, double t0, double t1, float t0f, float t1f,
+         float e[4], int use_float)
+{
+    const char *base = (const char *)q;
+#if defined(__SSE2__)
+    if (use_float) {
+        /* the three axes written out: the ray's values stay in registers */
+#define SLAB(k)                                                                              \
+    lo_t = _mm_max_ps(lo_t, _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(base + near##k)), \
+                                                  of##k),                                    \
+                                       invf##k));                                            \
+    hi_t = _mm_min_ps(hi_t, _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(base + far##k)),  \
+                                                  of##k),                                    \
+                                       invf##k))
+        const __m128 of0 = r->of[0], of1 = r->of[1], of2 = r->of[2];
+        const __m128 invf0 = r->invf[0], invf1 = r->invf[1], invf2 = r->invf[2];
+        const unsigned near0 = r->near[0], near1 = r->near[1], near2 = r->near[2];
+        const unsigned far0 = r->far[0], far1 = r->far[1], far2 = r->far[2];
+        __m128 lo_t = _mm_set1_ps(t0f), hi_t = _mm_set1_ps(t1f);
+        SLAB(0);
+        SLAB(1);
+        SLAB(2);
+#undef SLAB
+        _mm_storeu_ps(e, lo_t);
+        return (unsigned)_mm_movemask_ps(_mm_cmple_ps(lo_t, hi_t));
+    }
+#else
+    (void)t0f;
+    (void)t1f;
+    (void)use_float;
+#endif
+    unsigned mask = 0;
+    for (unsigned c = 0; c < 4; c++) {
+        double a0 = t0, a1 = t1;
+        for (unsigned k = 0; k < 3; k++) {
+            const float *nf = (const float *)(base + r->near[k]);
+            const float *ff = (const float *)(base + r->far[k]);
+            double a = ((double)nf[c] - r->o[k]) * r->inv[k];
+            double b = ((double)ff[c] - r->o[k]) * r->inv[k];
+            a0 = a > a0 ? a : a0;
+            a1 = b < a1 ? b : a1;
+        }
+        e[c] = down_f(a0);
+        mask |= (unsigned)(a0 <= a1) << c;
+    }
+    return mask;
+}
+
+/* The walk's stack: a node's index and meta (bvh.h) and its entry. One
+ * quad pushes three at most, so three per level and the root suffice. */
+#define BVH4_STACK (3 * BVH_MAX_DEPTH + 2)
+
+/* The walk of T for R over [TMIN, C->tmax] (which shrinks as closest-hit
+ * leaves find hits), ANY: stop at the first hit; returns 1 when it did.
+ * *TESTED counts the box tests. Inlined per path (USE_FLOAT constant). */
+static inline __attribute__((always_inline)) int
+walk4(const bvh *t, const bvh4_ray *r, double tmin, query_state *c, int any, int use_float,
+      uint64_t *tested)
+{
+    const double sh = use_float ? r->scale : 1.0;
+    const float tmin_f = t_down(tmin, sh);
+    float best_f = t_up(c->tmax, sh);
+    uint32_t st_index[BVH4_STACK], st_meta[BVH4_STACK];
+    float st_entry[BVH4_STACK];
+    unsigned sp = 0;
+    /* the root's box, in double on either path (near and far faces as in
+     * the quads') */
+    {
+        double a0 = tmin, a1 = c->tmax;
+        for (unsigned k = 0; k < 3; k++) {
+            const bvh_node *n = &t->root;
+            int neg = r->near[k] != (unsigned)(offsetof(bvh_quad, lo) + k * sizeof(float[4]));
+            double a = ((double)(neg ? n->hi[k] : n->lo[k]) - r->o[k]) * r->inv[k];
+            double b = ((double)(neg ? n->lo[k] : n->hi[k]) - r->o[k]) * r->inv[k];
+            a0 = a > a0 ? a : a0;
+            a1 = b < a1 ? b : a1;
+        }
+        *tested = 1;
+        if (!(a0 <= a1))
+            return 0;
+    }
+    uint64_t quads = 0; /* counted here, added to *TESTED at the end: the
+                         * loop keeps it in a register */
+    int found = 0;
+    uint32_t index = t->root.index, meta = t->root.meta;
+    for (;;) {
+        if (meta >> 2) { /* a leaf */
+            double before = c->tmax;
+            if (leaf_records(c, index, meta >> 2, any)) {
+                found = 1;
+                break;
+            }
+            if (c->tmax != before)
+                best_f = t_up(c->tmax, sh);
+        } else {
+            const bvh_quad *q = &t->quads[index];
+            float e[4];
+            unsigned hit = quad_hit(q, r, tmin, c->tmax, tmin_f, best_f, e, use_float);
+            quads++;
+            if (hit) {
+                unsigned first = (unsigned)__builtin_ctz(hit);
+                hit &= hit - 1;
+                if (!hit) { /* one box met: enter it */
+                    index = q->index[first];
+                    meta = q->meta[first];
+                    continue;
+                }
+                /* several: push them farthest first, enter the nearest */
+                unsigned lane[4], m = 0;
+                lane[m++] = first;
+                while (hit) {
+                    unsigned l = (unsigned)__builtin_ctz(hit);
+                    hit &= hit - 1;
+                    unsigned j = m++;
+                    for (; j > 0 && e[lane[j - 1]] < e[l]; j--)
+                        lane[j] = lane[j - 1];
+                    lane[j] = l;
+                }
+                for (unsigned j = 0; j + 1 < m; j++) {
+                    st_index[sp] = q->index[lane[j]];
+                    st_meta[sp] = q->meta[lane[j]];
+                    st_entry[sp++] = e[lane[j]];
+                }
+                index = q->index[lane[m - 1]];
+                meta = q->meta[lane[m - 1]];
+                continue;
+            }
+        }
+        while (sp && st_entry[sp - 1] > best_f) /* beyond the best hit */
+            sp--;
+        if (!sp)
+            break;
+        sp--;
+        index = st_index[sp];
+        meta = st_meta[sp];
+    }
+    *tested += 4 * quads;
+    return found;
+}
+
+/* The walk on the path R allows. */
+static inline int walk_ray(const bvh *t, const bvh4_ray *r, int use_float, double tmin,
+                           query_state *c, int any, uint64_t *tested)
+{
+    return use_float ? walk4(t, r, tmin, c, any, 1, tested)
+                     : walk4(t, r, tmin, c, any, 0, tested);
+}
+
+/* Closest hit into HIT, or occlusion when HIT is NULL. */
+static inline __attribute__((always_inline)) int query4(const bsp_accel *a, bsp_query *q,
+                                                        const bsp_ray *ray, uint32_t from,
+                                                        bsp_hit *hit)
+{
+    int out;
+    if (query_without_walk(a, q, ray, from, hit, &out))
+        return out;
+    const bvh *t = a->impl;
+    bvh4_ray r;
+    int fl = bvh4_ray_init(&r, t, ray);
+    query_state c;
+    query_start(&c, a->scene, t, ray, from);
+    uint64_t tested = 0;
+    int found = walk_ray(t, &r, fl, ray->tmin, &c, !hit, &tested);
+    int closest = query_finish(q, &c, tested, hit);
+    return hit ? closest : found;
+}
+
+int bvh4_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
+                   bsp_hit *hit)
+{
+    return query4(a, q, ray, from, hit);
+}
+
+int bvh4_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from)
+{
+    return query4(a, q, ray, from, NULL);
+}
