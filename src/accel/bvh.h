@@ -48,7 +48,9 @@
 #ifndef BSPRAY_ACCEL_BVH_H
 #define BSPRAY_ACCEL_BVH_H
 
+#include <float.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "accel/kd_local.h"
 
@@ -144,6 +146,33 @@ static inline bvh_node bvh_get(const bvh *t, uint32_t id)
     n.index = p->index[c];
     n.meta = p->meta[c];
     return n;
+}
+
+/* The float after / before F (F finite; at +-FLT_MAX, +-inf). Inline:
+ * libm's nextafterf is a call, and the four-wide walk rounds after every
+ * leaf that hits. */
+static inline float bvh_float_step(float f, int up)
+{
+    if (f == 0.0f)
+        return up ? FLT_TRUE_MIN : -FLT_TRUE_MIN;
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    u += (f > 0.0f) == (up != 0) ? 1u : (uint32_t)-1; /* away from / towards 0 */
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+/* X rounded to a float towards -inf / +inf: a node's float box contains
+ * its double one; the walk's float interval contains the double one. */
+static inline float bvh_float_down(double x)
+{
+    float f = (float)x;
+    return (double)f > x ? bvh_float_step(f, 0) : f;
+}
+static inline float bvh_float_up(double x)
+{
+    float f = (float)x;
+    return (double)f < x ? bvh_float_step(f, 1) : f;
 }
 
 /* The ids of interior node N's children in IDS (left to right), and how

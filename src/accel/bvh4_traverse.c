@@ -42,31 +42,6 @@
 #include "accel/bvh.h"
 #include "accel/bvh_query.h"
 
-/* The float after / before F (F finite; NaN stays). Inline: libm's
- * nextafterf is a call, and the walk rounds after every leaf that hits. */
-static inline float float_step(float f, int up)
-{
-    if (f == 0.0f)
-        return up ? FLT_TRUE_MIN : -FLT_TRUE_MIN;
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    u += (f > 0.0f) == (up != 0) ? 1u : (uint32_t)-1; /* away from / towards 0 */
-    memcpy(&f, &u, sizeof f);
-    return f;
-}
-
-/* X rounded to a float towards -inf / +inf. */
-static inline float down_f(double x)
-{
-    float f = (float)x;
-    return (double)f > x ? float_step(f, 0) : f;
-}
-static inline float up_f(double x)
-{
-    float f = (float)x;
-    return (double)f < x ? float_step(f, 1) : f;
-}
-
 /* 2^E as a double, for E in [-1022, 1023]. */
 static inline double pow2(int e)
 {
@@ -89,11 +64,11 @@ typedef struct bvh4_ray {
  * rounded down / up to a float; a positive t never rounds up to 0. */
 static inline float t_down(double t, double scale)
 {
-    return down_f(t * scale);
+    return bvh_float_down(t * scale);
 }
 static inline float t_up(double t, double scale)
 {
-    float f = up_f(t * scale);
+    float f = bvh_float_up(t * scale);
     return f == 0.0f && t > 0.0 ? FLT_TRUE_MIN : f;
 }
 
@@ -198,7 +173,7 @@ quad_hit(const bvh_quad *q, const bvh4_ray *r, double t0, double t1, float t0f, 
             a0 = a > a0 ? a : a0;
             a1 = b < a1 ? b : a1;
         }
-        e[c] = down_f(a0);
+        e[c] = bvh_float_down(a0);
         mask |= (unsigned)(a0 <= a1) << c;
     }
     return mask;

@@ -35,18 +35,6 @@ typedef struct builder {
     int depth_max;     /* a node this deep is a leaf */
 } builder;
 
-/* X rounded to a float towards -inf / +inf: the float box contains the
- * double one. */
-static float float_down(double x)
-{
-    float f = (float)x;
-    return (double)f > x ? nextafterf(f, -INFINITY) : f;
-}
-static float float_up(double x)
-{
-    float f = (float)x;
-    return (double)f < x ? nextafterf(f, INFINITY) : f;
-}
 
 static double centroid(const bsp_box *b, unsigned k)
 {
@@ -186,8 +174,8 @@ static void build_node(builder *b, uint32_t me, uint32_t begin, uint32_t end, in
     }
     bvh_node node;
     for (unsigned k = 0; k < 3; k++) {
-        node.lo[k] = float_down(box.lo.v[k]);
-        node.hi[k] = float_up(box.hi.v[k]);
+        node.lo[k] = bvh_float_down(box.lo.v[k]);
+        node.hi[k] = bvh_float_up(box.hi.v[k]);
     }
     split_choice c = {0, -1, 0.0, 0.0};
     if (depth >= b->depth_max || !choose_split(b, begin, end, &box, &cbox, tsum, &c)) {
