@@ -157,7 +157,7 @@ asan-test:
 # threads, byte for byte), and the allocation sweep's two-thread scenarios.
 # A race report exits the program with status 66, which fails the test.
 TSAN_BUILD := build-tsan
-TSAN_TESTS := batch_ render_identical render_tiles sah_build_is_deterministic every_allocation
+TSAN_TESTS := batch_ render_identical render_tiles sah_build_is_deterministic bvh_build_is_deterministic every_allocation
 tsan-test:
 	$(MAKE) BUILD=$(TSAN_BUILD) CC=clang CXX=clang++ OPT="-O1 -g" SAN="-fsanitize=thread" \
 	    $(TSAN_BUILD)/bspray $(TSAN_BUILD)/bspray_tests $(TSAN_BUILD)/tests/oom_sweep

@@ -7,6 +7,7 @@
  */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "accel/bvh.h"
@@ -346,4 +347,82 @@ TEST(bvh4_float_and_double_paths_match_naive)
     bsp_accel_destroy(nv);
     bsp_accel_destroy(a);
     bsp_scene_destroy(s);
+}
+
+/* The threaded build (bvh_build.c: subtrees deferred as tasks) gives the
+ * same bytes on 1 and 3 threads — the root, every pair or quad, the
+ * records' order — and those trees answer as the naive method. The scenes
+ * have more than 2 BVH_TASK_FLOOR primitives, so most of their tree is
+ * built in tasks. */
+TEST(bvh_build_is_deterministic)
+{
+    const char *specs[] = {"spd:tetra:7", "spd:balls:5"};
+    const size_t nspecs = getenv("BSPRAY_TEST_QUICK") ? 1 : 2;
+    for (size_t i = 0; i < nspecs; i++) {
+        bsp_scene *s = NULL;
+        bsp_error err;
+        REQUIRE_MSG(bsp_scene_load(specs[i], &s, &err) == BSP_OK, "%s", err.message);
+        REQUIRE(bsp_scene_prim_count(s) >= 2 * 4096);
+        for (int wide = 0; wide < 2; wide++) {
+            bsp_accel *acc[2];
+            for (int v = 0; v < 2; v++) {
+                bsp_build_options o;
+                bsp_build_options_defaults(&o);
+                o.kind = wide ? BSP_ACCEL_BVH4 : BSP_ACCEL_BVH;
+                o.threads = v ? 3 : 1;
+                REQUIRE_MSG(bsp_accel_build(s, &o, &acc[v], &err) == BSP_OK, "%s", err.message);
+                CHECK_MSG(bsp_accel_check(acc[v], &err) == BSP_OK, "%s", err.message);
+            }
+            const bvh *a = acc[0]->impl, *b = acc[1]->impl;
+            REQUIRE(a->nnodes == b->nnodes && a->nrec == b->nrec && a->width == b->width);
+            CHECK(memcmp(&a->root, &b->root, sizeof a->root) == 0);
+            const size_t node_bytes =
+                wide ? (a->nnodes - 1) / 4 * sizeof(bvh_quad) : (a->nnodes - 2) / 2 * sizeof(bvh_pair);
+            const void *na = wide ? (const void *)a->quads : (const void *)a->pairs;
+            const void *nb = wide ? (const void *)b->quads : (const void *)b->pairs;
+            CHECK_MSG(memcmp(na, nb, node_bytes) == 0, "%s %s: node arrays differ", specs[i],
+                      wide ? "bvh4" : "bvh");
+            uint32_t differ = 0;
+            for (uint32_t r = 0; r < a->nrec; r++)
+                differ += a->rec[r].prim != b->rec[r].prim;
+            CHECK_MSG(differ == 0, "%s: %u records in another order", specs[i], differ);
+            /* the threaded tree against the naive method on random rays */
+            bsp_build_options o;
+            bsp_build_options_defaults(&o);
+            o.kind = BSP_ACCEL_NAIVE;
+            bsp_accel *nv = NULL;
+            REQUIRE(bsp_accel_build(s, &o, &nv, &err) == BSP_OK);
+            bsp_query *qa = bsp_query_create(acc[1]), *qn = bsp_query_create(nv);
+            REQUIRE(qa && qn);
+            const bsp_box box = bsp_scene_bounds(s);
+            uint64_t rng = 99 + i;
+            int bad = 0, hits = 0;
+            for (int j = 0; j < 3000; j++) {
+                double org[3], d[3];
+                for (int k = 0; k < 3; k++) {
+                    double ext = box.hi.v[k] - box.lo.v[k];
+                    org[k] = box.lo.v[k] - 0.2 * ext + 1.4 * ext * next_u(&rng);
+                    d[k] = 2 * next_u(&rng) - 1;
+                }
+                if (j % 5 == 0)
+                    d[j % 3] = 0.0; /* a zero component */
+                bsp_ray r = {bsp_v3(org[0], org[1], org[2]), bsp_v3(d[0], d[1], d[2]), 0.0,
+                             INFINITY};
+                bsp_hit ha, hn;
+                int xa = bsp_intersect(acc[1], qa, &r, &ha), xn = bsp_intersect(nv, qn, &r, &hn);
+                hits += xn;
+                bad += xa != xn || (xn && (ha.prim != hn.prim || ha.t != hn.t)) ||
+                       bsp_occluded(acc[1], qa, &r) != bsp_occluded(nv, qn, &r);
+            }
+            CHECK_MSG(bad == 0, "%s %s: %d of 3000 rays differ from naive", specs[i],
+                      wide ? "bvh4" : "bvh", bad);
+            CHECK_MSG(hits > 300, "%s: only %d rays hit", specs[i], hits);
+            bsp_query_destroy(qa);
+            bsp_query_destroy(qn);
+            bsp_accel_destroy(nv);
+            bsp_accel_destroy(acc[0]);
+            bsp_accel_destroy(acc[1]);
+        }
+        bsp_scene_destroy(s);
+    }
 }

@@ -387,7 +387,7 @@ void json_real(FILE *f, double x)
 int kind_builds_in_parallel(bsp_accel_kind k)
 {
     return k != BSP_ACCEL_NAIVE && k != BSP_ACCEL_KAPLAN && k != BSP_ACCEL_GRID &&
-           k != BSP_ACCEL_OCTREE && k != BSP_ACCEL_BVH && k != BSP_ACCEL_BVH4;
+           k != BSP_ACCEL_OCTREE;
 }
 
 void tree_stats_json(FILE *f, const char *indent, const bsp_tree_stats *t, bsp_accel_kind kind)
@@ -705,10 +705,10 @@ const char build_args_help[] =
     "                     (uniform lines: the surface area); see docs/modified-sah.md\n"
     "  --mixed-check on|off  sah-mixed: also build the sah tree, shoot a 64 x 64 render's\n"
     "                     rays through both and keep the cheaper (default on)\n"
-    "  --build-threads N  sah family: build threads (default: every core); the tree is\n"
-    "                     the same for any N\n"
-    "  --max-tree-mb N    kd-tree, octree, grid: fail when the nodes (cells) and lists\n"
-    "                     need more than N MiB (default: half the machine's memory)\n"
+    "  --build-threads N  sah family, bvh, bvh4: build threads (default: every core);\n"
+    "                     the tree is the same for any N\n"
+    "  --max-tree-mb N    kd-tree, octree, grid, BVH: fail when the nodes (cells) and\n"
+    "                     lists need more than N MiB (default: half the machine's memory)\n"
     SUBDIVISION_ARGS_HELP COST_ARGS_HELP;
 
 int parse_build_arg(args *a, bsp_build_options *opts)

@@ -190,15 +190,15 @@ typedef struct bsp_build_options {
     double mixed_primary_share; /* sah-mixed: primary rays / all rays of the render, in
                                    (0, 1]; 0: measured by a 65 x 65 pre-pass of the Whitted
                                    renderer (depth 4) from the view */
-    int threads;             /* sah family: build threads; 0: every online core. The tree
-                                is the same for any count */
+    int threads;             /* sah family, bvh, bvh4: build threads; 0: every online
+                                core. The tree is the same for any count */
     bsp_mixed_model mixed_model; /* sah-mixed: the model of the non-primary rays (default
                                     BSP_MIXED_COUNTED) */
     int mixed_check; /* sah-mixed: 1 (default) also builds the plain sah tree of the same
                         options, measures both on the rays of a 64 x 64 render of the view
                         and keeps the cheaper (bsp_accel_mixed_check); 0 keeps the
                         sah-mixed tree whatever it costs */
-    size_t max_tree_bytes; /* kd-trees and grids: the most bytes the nodes (cells) and
+    size_t max_tree_bytes; /* kd-trees, grids, BVHs: the most bytes the nodes (cells) and
                               leaf references may take; a build that needs more fails
                               with BSP_ERR_LIMIT (deep trees of overlapping primitives
                               grow as 2^depth). 0 (default): half the machine's

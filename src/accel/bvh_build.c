@@ -10,9 +10,20 @@
  * the node holds more than the most primitives a leaf may hold
  * (bsp_build_options.max_leaf_prims, default BVH_LEAF_MAX). Centroids that
  * all coincide are halved in index order; a node at max_depth (default and
- * at most BVH_MAX_DEPTH) is a leaf. One thread; O(N log N) for a tree of
- * logarithmic depth. The four-wide tree (`--accel bvh4`) is this binary
- * tree collapsed (collapse_node). Layout and exactness: bvh.h.
+ * at most BVH_MAX_DEPTH) is a leaf. O(N log N) for a tree of logarithmic
+ * depth. The four-wide tree (`--accel bvh4`) is this binary tree collapsed
+ * (collapse_node). Layout and exactness: bvh.h.
+ *
+ * Threads (bsp_build_options.threads): in a scene of at least
+ * 2 BVH_TASK_FLOOR primitives, the calling thread builds the top of the
+ * tree and defers each node of task_min..task_max primitives (about 1/512
+ * to 1/64 of the scene) as a task, which the pool's workers build (each
+ * into pairs of its own) while the top goes on; the subtrees are then
+ * appended after the top's pairs in task order, their child ids rebased.
+ * Which nodes become tasks depends only on the scene, and one thread defers
+ * them too, so every thread count gives the same bytes. A task's subtree
+ * partitions only its own range of the primitives' order, and every leaf
+ * fills its own range of the records as it is made.
  */
 #include <math.h>
 #include <stdint.h>
@@ -23,17 +34,44 @@
 #include "accel/kd_cost.h"
 #include "geom/vec.h"
 #include "util/bigmem.h"
+#include "util/task_pool.h"
+
+/* No tasks below 2 x this many primitives; a task has at most this many or
+ * 1/64 of the scene, whichever is more. */
+#define BVH_TASK_FLOOR 4096
+
+typedef struct bvh_task bvh_task;
 
 typedef struct builder {
+    const bsp_scene *s;
     const bsp_box *bounds; /* per primitive: its bounds grown by pad */
     const double *cost;    /* per primitive: T_i */
     uint32_t *order;       /* the live primitives, partitioned as the build goes */
-    bvh *t;
-    uint32_t nnodes;
+    kd_local *rec;         /* the records in leaf order: a leaf fills its range */
+    bvh_node *root;        /* node id 0 goes here */
+    bvh_pair *pairs;       /* node id 2 + 2p + c goes to pairs[p], lane c */
+    uint32_t nnodes;       /* the next pair's first id */
     double ctrav;
     uint32_t leaf_max; /* a node of more primitives is split (if it can be) */
     int depth_max;     /* a node this deep is a leaf */
+    /* the top of a threaded build (pool not NULL): its deferred tasks */
+    task_pool *pool;
+    uint32_t task_min, task_max; /* the sizes of node deferred */
+    bvh_task **tasks;            /* in the order listed */
+    size_t ntasks, cap;
+    int failed; /* out of memory: a task could not be listed */
 } builder;
+
+/* A deferred subtree: node ME of the top, ORDER[begin, end) at DEPTH, built
+ * by its own builder into ROOT and PAIRS (ids from 2, as in a whole tree). */
+struct bvh_task {
+    builder b;
+    uint32_t me, begin, end;
+    int depth;
+    bvh_node root;
+    bvh_pair *pairs; /* room for end - begin - 1 pairs (a tree of that many leaves) */
+    int failed;      /* out of memory */
+};
 
 
 static double centroid(const bsp_box *b, unsigned k)
@@ -138,14 +176,14 @@ static uint32_t partition(builder *b, uint32_t begin, uint32_t end, const split_
     return i;
 }
 
-/* Stores N as node ID of T (bvh.h). */
-static void set_node(bvh *t, uint32_t id, const bvh_node *n)
+/* Stores N as node ID of B's output (bvh.h). */
+static void set_node(builder *b, uint32_t id, const bvh_node *n)
 {
     if (id == 0) {
-        t->root = *n;
+        *b->root = *n;
         return;
     }
-    bvh_pair *p = &t->pairs[(id - 2) >> 1];
+    bvh_pair *p = &b->pairs[(id - 2) >> 1];
     unsigned c = id & 1u;
     for (unsigned k = 0; k < 3; k++) {
         p->lo[k][c] = n->lo[k];
@@ -155,11 +193,49 @@ static void set_node(bvh *t, uint32_t id, const bvh_node *n)
     p->meta[c] = n->meta;
 }
 
+/* Lists ORDER[begin, end) at DEPTH as a task for node ME of B (the top). */
+static void defer(builder *b, uint32_t me, uint32_t begin, uint32_t end, int depth)
+{
+    bvh_task *tk = calloc(1, sizeof *tk);
+    if (b->ntasks == b->cap && tk) {
+        size_t ncap = b->cap ? 2 * b->cap : 64;
+        bvh_task **nv = realloc(b->tasks, ncap * sizeof *nv);
+        if (nv) {
+            b->tasks = nv;
+            b->cap = ncap;
+        }
+    }
+    if (!tk || b->ntasks == b->cap) {
+        free(tk);
+        b->failed = 1;
+        return;
+    }
+    tk->b = *b;
+    tk->b.pool = NULL; /* a task defers nothing */
+    tk->b.tasks = NULL;
+    tk->b.ntasks = tk->b.cap = 0;
+    tk->me = me;
+    tk->begin = begin;
+    tk->end = end;
+    tk->depth = depth;
+    if (!task_pool_add(b->pool, tk)) {
+        free(tk);
+        b->failed = 1;
+        return;
+    }
+    b->tasks[b->ntasks++] = tk;
+}
+
 /* Builds the subtree of ORDER[begin, end) (not empty) at DEPTH as node ME,
- * its children's pairs from b->nnodes on. Never runs out of room: a tree of
- * n non-empty leaves has n - 1 pairs, and b->t->pairs holds that many. */
+ * its children's pairs from b->nnodes on, or defers it (defer). Never runs
+ * out of room: a tree of n non-empty leaves has n - 1 pairs, and b->pairs
+ * holds that many. */
 static void build_node(builder *b, uint32_t me, uint32_t begin, uint32_t end, int depth)
 {
+    if (b->pool && end - begin <= b->task_max && end - begin >= b->task_min) {
+        defer(b, me, begin, end, depth);
+        return;
+    }
     bsp_box box = box_empty(), cbox = box_empty();
     double tsum = 0.0;
     for (uint32_t j = begin; j < end; j++) {
@@ -181,7 +257,9 @@ static void build_node(builder *b, uint32_t me, uint32_t begin, uint32_t end, in
     if (depth >= b->depth_max || !choose_split(b, begin, end, &box, &cbox, tsum, &c)) {
         node.index = begin;
         node.meta = (end - begin) << 2;
-        set_node(b->t, me, &node);
+        set_node(b, me, &node);
+        for (uint32_t j = begin; j < end; j++)
+            kd_local_fill(&b->rec[j], b->s, b->order[j]);
         return;
     }
     uint32_t mid = partition(b, begin, end, &c);
@@ -189,9 +267,57 @@ static void build_node(builder *b, uint32_t me, uint32_t begin, uint32_t end, in
     b->nnodes += 2;
     node.index = pair;
     node.meta = c.axis;
-    set_node(b->t, me, &node);
+    set_node(b, me, &node);
     build_node(b, pair, begin, mid, depth + 1);
     build_node(b, pair + 1, mid, end, depth + 1);
+}
+
+/* Builds task TASK (a task_run_fn). */
+static void run_task(void *ctx, void *task)
+{
+    (void)ctx;
+    bvh_task *tk = task;
+    uint32_t m = tk->end - tk->begin;
+    tk->pairs = malloc((m > 1 ? m - 1 : 1) * sizeof *tk->pairs);
+    if (!tk->pairs) {
+        tk->failed = 1;
+        return;
+    }
+    tk->b.root = &tk->root;
+    tk->b.pairs = tk->pairs;
+    tk->b.nnodes = 2;
+    build_node(&tk->b, 0, tk->begin, tk->end, tk->depth);
+}
+
+/* Appends the tasks' subtrees to B's tree, in task order, after its pairs:
+ * the task's id j >= 2 becomes b->nnodes + j - 2 at the time, its root goes
+ * to its node of the top. Frees the tasks; 0 when one of them failed. */
+static int splice_tasks(builder *b)
+{
+    int ok = !b->failed;
+    for (size_t i = 0; i < b->ntasks; i++) {
+        bvh_task *tk = b->tasks[i];
+        ok = ok && !tk->failed;
+        if (ok) {
+            const uint32_t shift = b->nnodes - 2, npairs = (tk->b.nnodes - 2) / 2;
+            for (uint32_t p = 0; p < npairs; p++) {
+                bvh_pair x = tk->pairs[p];
+                for (unsigned c = 0; c < 2; c++)
+                    x.index[c] += (x.meta[c] >> 2) ? 0 : shift; /* interior: a pair's id */
+                b->pairs[(b->nnodes - 2) / 2 + p] = x;
+            }
+            if (!BVH_COUNT(&tk->root))
+                tk->root.index += shift;
+            set_node(b, tk->me, &tk->root);
+            b->nnodes += 2 * npairs;
+        }
+        free(tk->pairs);
+        free(tk);
+    }
+    free(b->tasks);
+    b->tasks = NULL;
+    b->ntasks = b->cap = 0;
+    return ok;
 }
 
 /* The children of binary node N (interior) that node's quad takes, in
@@ -374,16 +500,34 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
         cost[p] = kd_prim_cost(s, p, &cm.c);
         b.order[live++] = p;
     }
+    b.s = s;
     b.bounds = bounds;
     b.cost = cost;
-    b.t = t;
+    b.rec = t->rec;
+    b.root = &t->root;
+    b.pairs = t->pairs;
+    if (n >= 2 * BVH_TASK_FLOOR) {
+        b.task_max = (uint32_t)(n / 64 > BVH_TASK_FLOOR ? n / 64 : BVH_TASK_FLOOR);
+        b.task_min = b.task_max / 8;
+        b.pool = task_pool_create(task_pool_threads(a->opts.threads), n / b.task_min + 1,
+                                  run_task, NULL);
+        if (!b.pool) {
+            st = bvh_oom(err);
+            goto done;
+        }
+    }
     if (n) {
         b.nnodes = 2; /* the root, and id 1, unused */
         build_node(&b, 0, 0, (uint32_t)n, 0);
     }
+    if (b.pool) {
+        task_pool_finish(b.pool);
+        if (!splice_tasks(&b)) {
+            st = bvh_oom(err);
+            goto done;
+        }
+    }
     t->nnodes = b.nnodes;
-    for (uint32_t i = 0; i < (uint32_t)n; i++)
-        kd_local_fill(&t->rec[i], s, b.order[i]);
     t->nrec = (uint32_t)n;
     if (wide && collapse(t) != BSP_OK)
         st = bvh_oom(err);

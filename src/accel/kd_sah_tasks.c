@@ -28,10 +28,10 @@
  */
 #include <math.h>
 #include <pthread.h>
-#include <unistd.h>
 
 #include "accel/kd_prune.h"
 #include "accel/kd_sah.h"
+#include "util/task_pool.h"
 
 struct sah_task {
     uint32_t node; /* its placeholder leaf in the main tree */
@@ -49,10 +49,7 @@ struct sah_task {
 
 int kd_build_threads(const bsp_build_options *o)
 {
-    if (o && o->threads > 0)
-        return o->threads;
-    long n = sysconf(_SC_NPROCESSORS_ONLN);
-    return n > 0 ? (int)(n < 256 ? n : 256) : 1;
+    return task_pool_threads(o ? o->threads : 0);
 }
 
 struct sah_pool {

@@ -524,6 +524,21 @@ static bsp_accel *build_or_die(const bsp_scene *s, bsp_accel_kind kind)
     return a;
 }
 
+/* Scene PATH loaded, the sweep's RAYS made in its box and the naive
+ * method's answers to them in REF. */
+static bsp_scene *load_with_reference(const char *path, bsp_ray *rays, bsp_hit *ref)
+{
+    bsp_scene *s = load_or_die(path);
+    make_rays(bsp_scene_bounds(s), rays);
+    bsp_accel *naive = build_or_die(s, BSP_ACCEL_NAIVE);
+    if (!answer(naive, rays, ref)) {
+        fprintf(stderr, "oom_sweep: %s: the naive method's answers failed\n", path);
+        exit(2);
+    }
+    bsp_accel_destroy(naive);
+    return s;
+}
+
 /* A gzip copy of SRC at DST (the reader's gunzip path); 0 on failure. */
 static int gzip_copy(const char *src, const char *dst)
 {
@@ -633,12 +648,7 @@ int main(int argc, char **argv)
     static bsp_ray rays[NRAYS];
     static bsp_hit ref[NRAYS];
     for (size_t si = 0; si < NSCENES; si++) {
-        bsp_scene *s = load_or_die(scene_names[si]);
-        make_rays(bsp_scene_bounds(s), rays);
-        bsp_accel *naive = build_or_die(s, BSP_ACCEL_NAIVE);
-        if (!answer(naive, rays, ref))
-            return 2;
-        bsp_accel_destroy(naive);
+        bsp_scene *s = load_with_reference(scene_names[si], rays, ref);
 
         for (size_t m = 0; m < sizeof methods / sizeof methods[0]; m++) {
             /* sah-mixed renders two small images per build: on the first scene only */
@@ -710,12 +720,7 @@ int main(int argc, char **argv)
      * of primitives; on one thread and on two (probes and tasks taken by the
      * workers, the estimate made while they wait). */
     {
-        bsp_scene *s = load_or_die("spd:balls:4");
-        make_rays(bsp_scene_bounds(s), rays);
-        bsp_accel *naive = build_or_die(s, BSP_ACCEL_NAIVE);
-        if (!answer(naive, rays, ref))
-            return 2;
-        bsp_accel_destroy(naive);
+        bsp_scene *s = load_with_reference("spd:balls:4", rays, ref);
         for (int threads = 1; threads <= 2; threads++) {
             scenario sc = {.run = run_build,
                            .scene = s,
@@ -730,6 +735,25 @@ int main(int argc, char **argv)
                 return 2;
             sweep(&sc);
         }
+        bsp_scene_destroy(s);
+    }
+    /* The BVHs' threaded build defers subtrees as tasks (bvh_build.c) in a
+     * scene of more than 8,192 primitives: on one thread (the calling
+     * thread builds them all) and on two. */
+    {
+        bsp_scene *s = load_with_reference("spd:tetra:7", rays, ref);
+        for (int wide = 0; wide < 2; wide++)
+            for (int threads = 1; threads <= 2; threads++) {
+                scenario sc = {.run = run_build,
+                               .scene = s,
+                               .kind = wide ? BSP_ACCEL_BVH4 : BSP_ACCEL_BVH,
+                               .threads = threads,
+                               .rays = rays,
+                               .ref_hits = ref};
+                snprintf(sc.name, sizeof sc.name, "build %s+tasks%s spd:tetra:7",
+                         wide ? "bvh4" : "bvh", threads > 1 ? "+2threads" : "");
+                sweep(&sc);
+            }
         bsp_scene_destroy(s);
     }
     remove(gz);
