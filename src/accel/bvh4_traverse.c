@@ -104,7 +104,8 @@ static int bvh4_ray_float(bvh4_ray *r, const bvh *t, const bsp_ray *ray)
     double m = 0.0;
     int fl = 1;
     for (unsigned k = 0; k < 3; k++) {
-        m = fmax(m, fabs(d[k]));
+        const double a = fabs(d[k]);
+        m = a > m ? a : m; /* fmax is a libm call here */
         fl &= fabs(o[k]) <= t->float_origin;
     }
 #if defined(__SSE2__)
@@ -128,27 +129,32 @@ static int bvh4_ray_float(bvh4_ray *r, const bvh *t, const bsp_ray *ray)
 #endif
 }
 
+/* The ray's float tests' values, in locals of the walk (bvh4_ray's are
+ * __m128, which may alias any store, so the compiler would load them again
+ * after every store of the loop). */
+typedef struct float_slabs {
+#if defined(__SSE2__)
+    __m128 of0, of1, of2, invf0, invf1, invf2;
+#endif
+    unsigned near0, near1, near2, far0, far1, far2;
+} float_slabs;
+
 /* Which of quad Q's boxes R's interval [T0, T1] (walk units) meets, as a
- * bit mask; E[c] is where it enters box c. */
+ * bit mask; E[c] is where it enters box c. The float tests take F. */
 static inline __attribute__((always_inline)) unsigned
-quad_hit(const bvh_quad *q, const bvh4_ray *r, double t0, double t1, float t0f, float t1f,
-         float e[4], int use_float)
+quad_hit(const bvh_quad *q, const bvh4_ray *r, const float_slabs *f, double t0, double t1,
+         float t0f, float t1f, float e[4], int use_float)
 {
     const char *base = (const char *)q;
 #if defined(__SSE2__)
     if (use_float) {
-        /* the three axes written out: the ray's values stay in registers */
 #define SLAB(k)                                                                              \
-    lo_t = _mm_max_ps(lo_t, _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(base + near##k)), \
-                                                  of##k),                                    \
-                                       invf##k));                                            \
-    hi_t = _mm_min_ps(hi_t, _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(base + far##k)),  \
-                                                  of##k),                                    \
-                                       invf##k))
-        const __m128 of0 = r->of[0], of1 = r->of[1], of2 = r->of[2];
-        const __m128 invf0 = r->invf[0], invf1 = r->invf[1], invf2 = r->invf[2];
-        const unsigned near0 = r->near[0], near1 = r->near[1], near2 = r->near[2];
-        const unsigned far0 = r->far[0], far1 = r->far[1], far2 = r->far[2];
+    lo_t = _mm_max_ps(lo_t, _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(base + f->near##k)), \
+                                                  f->of##k),                                 \
+                                       f->invf##k));                                         \
+    hi_t = _mm_min_ps(hi_t, _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(base + f->far##k)),  \
+                                                  f->of##k),                                 \
+                                       f->invf##k))
         __m128 lo_t = _mm_set1_ps(t0f), hi_t = _mm_set1_ps(t1f);
         SLAB(0);
         SLAB(1);
@@ -158,6 +164,7 @@ quad_hit(const bvh_quad *q, const bvh4_ray *r, double t0, double t1, float t0f, 
         return (unsigned)_mm_movemask_ps(_mm_cmple_ps(lo_t, hi_t));
     }
 #else
+    (void)f;
     (void)t0f;
     (void)t1f;
     (void)use_float;
@@ -201,6 +208,11 @@ walk4(const bvh *t, const bvh4_ray *r, double tmin, query_state *c, int any, int
                          * loop keeps it in a register */
     int found = 0;
     uint32_t index = t->root.index, meta = t->root.meta;
+    const float_slabs f = {
+#if defined(__SSE2__)
+        r->of[0], r->of[1], r->of[2], r->invf[0], r->invf[1], r->invf[2],
+#endif
+        r->near[0], r->near[1], r->near[2], r->far[0], r->far[1], r->far[2]};
     for (;;) {
         if (meta >> 2) { /* a leaf */
             double before = c->tmax;
@@ -213,7 +225,7 @@ walk4(const bvh *t, const bvh4_ray *r, double tmin, query_state *c, int any, int
         } else {
             const bvh_quad *q = &t->quads[index];
             float e[4];
-            unsigned hit = quad_hit(q, r, tmin, c->tmax, tmin_f, best_f, e, use_float);
+            unsigned hit = quad_hit(q, r, &f, tmin, c->tmax, tmin_f, best_f, e, use_float);
             quads++;
             if (hit) {
                 unsigned first = (unsigned)__builtin_ctz(hit);
