@@ -29,13 +29,13 @@ static inline bsp_scene *fuzz_scene(const uint8_t *d, size_t n, bsp_accel_kind *
 {
     if (n < 1)
         return NULL;
-    static const bsp_accel_kind kinds[7] = {BSP_ACCEL_SAH,    BSP_ACCEL_KAPLAN,
+    static const bsp_accel_kind kinds[8] = {BSP_ACCEL_SAH,    BSP_ACCEL_KAPLAN,
                                             BSP_ACCEL_SAH_PER, BSP_ACCEL_GRID,
                                             BSP_ACCEL_OCTREE, BSP_ACCEL_BVH,
-                                            BSP_ACCEL_BVH4};
+                                            BSP_ACCEL_BVH4,   BSP_ACCEL_BVH8};
     int fmt = d[0] % 3;
-    *kind = kinds[(d[0] / 3) % 7];
-    *variant = (d[0] / 21) % 2;
+    *kind = kinds[(d[0] / 3) % 8];
+    *variant = (d[0] / 24) % 2;
     const char *buf = (const char *)d + 1;
     bsp_scene *s = NULL;
     bsp_error err = {0};

@@ -23,12 +23,12 @@ make -s build/bspray >/dev/null
 seeds=build-fuzz/seeds
 rm -rf "$seeds" && mkdir -p "$seeds"
 # An input is one byte choosing the reader (value mod 3: NFF, OBJ, PLY) and
-# the structure (value / 3 mod 7: sah, kaplan, sah-per, grid, octree, bvh,
-# bvh4; value / 21 mod 2: for the octree centre or cost split, for the grid
-# uniform or recursive), then the file.
-seed() { # FORMAT FILE NAME: nine seeds, one per structure (k 11: the octree cut
-    # by cost; k 10: the recursive grid)
-    for k in 0 1 2 3 4 5 6 10 11; do
+# the structure (value / 3 mod 8: sah, kaplan, sah-per, grid, octree, bvh,
+# bvh4, bvh8; value / 24 mod 2: for the octree centre or cost split, for the
+# grid uniform or recursive), then the file.
+seed() { # FORMAT FILE NAME: ten seeds, one per structure (k 12: the octree cut
+    # by cost; k 11: the recursive grid)
+    for k in 0 1 2 3 4 5 6 7 11 12; do
         { printf "\\$(printf '%03o' $((k * 3 + $1)))"; cat "$2"; } >"$seeds/$3-$k"
     done
 }

@@ -1,9 +1,9 @@
 /*
- * test_bvh.c — the BVHs (`--accel bvh`, `bvh4`) beyond the exactness tests
+ * test_bvh.c — the BVHs (`--accel bvh`, `bvh4`, `bvh8`) beyond the exactness tests
  * they share with the kd-trees (test_kdtree.c, test_kd_sah.c): their leaf
  * and depth limits, their figures against a hand computation, their visit,
- * the four-wide tree's collapse and its float and double paths, and what
- * they refuse.
+ * the wide trees' collapse and their float and double paths, the threaded
+ * build, and what they refuse.
  */
 #include <math.h>
 #include <stdio.h>
@@ -28,6 +28,13 @@ static bsp_accel *bvh_kind_of(const bsp_scene *s, bsp_accel_kind kind, int leaf_
     CHECK_MSG(bsp_accel_check(a, &err) == BSP_OK, "%s", err.message);
     return a;
 }
+
+/* The three BVHs, and the wide ones' widths. */
+static const bsp_accel_kind bvh_kinds[] = {BSP_ACCEL_BVH, BSP_ACCEL_BVH4, BSP_ACCEL_BVH8};
+static const struct {
+    bsp_accel_kind kind;
+    unsigned width;
+} wide_kinds[] = {{BSP_ACCEL_BVH4, 4}, {BSP_ACCEL_BVH8, 8}};
 
 static bsp_accel *bvh_of(const bsp_scene *s, int leaf_size, int max_depth)
 {
@@ -154,8 +161,8 @@ TEST(bvh_expected_cost_matches_hand_computation)
 TEST(bvh_empty_scene_and_no_save)
 {
     bsp_scene *s = bsp_scene_create();
-    for (int wide = 0; wide < 2; wide++) {
-    bsp_accel *a = bvh_kind_of(s, wide ? BSP_ACCEL_BVH4 : BSP_ACCEL_BVH, 0, 0);
+    for (size_t i = 0; i < sizeof bvh_kinds / sizeof bvh_kinds[0]; i++) {
+    bsp_accel *a = bvh_kind_of(s, bvh_kinds[i], 0, 0);
     bsp_query *q = bsp_query_create(a);
     bsp_ray r = {bsp_v3(0, 0, -5), bsp_v3(0, 0, 1), 0.0, INFINITY};
     bsp_hit h;
@@ -168,18 +175,19 @@ TEST(bvh_empty_scene_and_no_save)
     harness_tmp_path(path, sizeof path, "bvh.tree");
     bsp_error err;
     CHECK(bsp_accel_save(a, path, &err) == BSP_ERR_INVALID);
-    CHECK_STR_CONTAINS(err.message, wide ? "bvh4" : "bvh");
+    CHECK_STR_CONTAINS(err.message, bsp_accel_kind_name(bvh_kinds[i]));
     bsp_query_destroy(q);
     bsp_accel_destroy(a);
     }
     bsp_scene_destroy(s);
 }
 
-/* The four-wide tree is the binary one collapsed: on teapot, every interior
- * node has two to four children, more than two on average, the leaves list
- * every primitive once, children's boxes lie in their parents', and the
- * limits hold as in the binary tree (a quad's levels count as its depth). */
-TEST(bvh4_collapse_keeps_leaves_and_limits)
+/* The wide trees are the binary one collapsed: on teapot, every interior
+ * node of width W has two to W children, more than W / 2 on average, the
+ * leaves list every primitive once, children's boxes lie in their
+ * parents', and the limits hold as in the binary tree (a wide node's levels
+ * count as its depth). */
+TEST(bvh_wide_collapse_keeps_leaves_and_limits)
 {
     bsp_error err;
     uint64_t n;
@@ -187,65 +195,76 @@ TEST(bvh4_collapse_keeps_leaves_and_limits)
     static const struct {
         int leaf, depth;
     } cases[] = {{0, 0}, {1, 0}, {4, 0}, {1, 5}};
-    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
-        bsp_accel *a = bvh_kind_of(s, BSP_ACCEL_BVH4, cases[i].leaf, cases[i].depth);
-        int want_leaf = cases[i].leaf ? cases[i].leaf : 8;
-        int want_depth = cases[i].depth ? cases[i].depth : 60;
-        visit_tally t;
-        memset(&t, 0, sizeof t);
-        REQUIRE(bsp_accel_visit_cells(a, -1, tally, &t, &err) == BSP_OK);
-        bsp_tree_stats st;
-        bsp_accel_tree_stats(a, &st);
-        CHECK(t.refs == n && st.references == n);
-        CHECK(t.leaves == st.leaves && t.nodes == st.leaves + st.interior_nodes);
-        /* children: every node but the root is one */
-        uint64_t children = t.nodes - 1;
-        CHECK_MSG(children >= 2 * st.interior_nodes && children <= 4 * st.interior_nodes &&
-                      children > 2 * st.interior_nodes,
-                  "%llu children of %llu interior nodes", (unsigned long long)children,
-                  (unsigned long long)st.interior_nodes);
-        CHECK(st.bytes == 32 + 128 * st.interior_nodes);
-        CHECK(!t.bad_box);
-        CHECK(t.deepest <= want_depth);
-        if (!cases[i].depth)
-            CHECK(t.largest_leaf <= (uint64_t)want_leaf);
-        bsp_accel_destroy(a);
+    for (size_t wk = 0; wk < sizeof wide_kinds / sizeof wide_kinds[0]; wk++) {
+        const uint64_t w = wide_kinds[wk].width;
+        for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+            bsp_accel *a = bvh_kind_of(s, wide_kinds[wk].kind, cases[i].leaf, cases[i].depth);
+            int want_leaf = cases[i].leaf ? cases[i].leaf : 8;
+            int want_depth = cases[i].depth ? cases[i].depth : 60;
+            visit_tally t;
+            memset(&t, 0, sizeof t);
+            REQUIRE(bsp_accel_visit_cells(a, -1, tally, &t, &err) == BSP_OK);
+            bsp_tree_stats st;
+            bsp_accel_tree_stats(a, &st);
+            CHECK(t.refs == n && st.references == n);
+            CHECK(t.leaves == st.leaves && t.nodes == st.leaves + st.interior_nodes);
+            /* children: every node but the root is one */
+            uint64_t children = t.nodes - 1;
+            CHECK_MSG(children >= 2 * st.interior_nodes && children <= w * st.interior_nodes &&
+                          2 * children > w * st.interior_nodes,
+                      "width %u, case %zu: %llu children of %llu interior nodes", (unsigned)w,
+                      i, (unsigned long long)children, (unsigned long long)st.interior_nodes);
+            CHECK(st.bytes == 32 + 32 * w * st.interior_nodes);
+            CHECK(!t.bad_box);
+            CHECK(t.deepest <= want_depth);
+            if (!cases[i].depth)
+                CHECK(t.largest_leaf <= (uint64_t)want_leaf);
+            bsp_accel_destroy(a);
+        }
     }
     bsp_scene_destroy(s);
 }
 
 /* Three unit spheres far apart, a leaf each: the binary tree's two interior
- * nodes become one quad of three children (its fourth lane unused), and a
- * ray hits the nearest sphere. The checker refuses the quad once its unused
- * lane is given a box. */
-TEST(bvh4_one_quad_and_its_unused_lane)
+ * nodes become one wide node of three children (its other lanes unused),
+ * and a ray hits the nearest sphere. The checker refuses the node once its
+ * last unused lane is given a box. */
+TEST(bvh_wide_one_node_and_its_unused_lanes)
 {
     bsp_scene *s = bsp_scene_create();
     bsp_error err;
     for (int i = 0; i < 3; i++)
         REQUIRE(bsp_scene_add_sphere(s, bsp_v3(10.0 * i, 0, 0), 1.0, &err) == BSP_OK);
-    bsp_accel *a = bvh_kind_of(s, BSP_ACCEL_BVH4, 1, 0);
-    bsp_tree_stats st;
-    bsp_accel_tree_stats(a, &st);
-    CHECK_EQ_INT((int)st.interior_nodes, 1);
-    CHECK_EQ_INT((int)st.leaves, 3);
-    CHECK(st.bytes == 32 + 128);
-    bsp_query *q = bsp_query_create(a);
-    bsp_ray r = {bsp_v3(25, 0, 0), bsp_v3(-1, 0, 0), 0.0, INFINITY};
-    bsp_hit h;
-    REQUIRE(bsp_intersect(a, q, &r, &h));
-    CHECK_EQ_INT((int)h.prim, 2);
-    CHECK_NEAR(h.t, 4.0, 1e-12);
-    r.org = bsp_v3(5, -5, 0); /* between the spheres, across the row */
-    r.dir = bsp_v3(0, 1, 0);
-    CHECK(!bsp_intersect(a, q, &r, &h));
-    bsp_query_destroy(q);
-    bvh *b = a->impl;
-    REQUIRE(b->width == 4 && b->quads[0].index[3] == BVH_NONE);
-    b->quads[0].lo[1][3] = 0.0f;
-    CHECK(bsp_accel_check(a, &err) == BSP_ERR_INVALID);
-    CHECK_STR_CONTAINS(err.message, "quad");
-    bsp_accel_destroy(a);
+    for (size_t wk = 0; wk < sizeof wide_kinds / sizeof wide_kinds[0]; wk++) {
+        const unsigned w = wide_kinds[wk].width;
+        bsp_accel *a = bvh_kind_of(s, wide_kinds[wk].kind, 1, 0);
+        bsp_tree_stats st;
+        bsp_accel_tree_stats(a, &st);
+        CHECK_EQ_INT((int)st.interior_nodes, 1);
+        CHECK_EQ_INT((int)st.leaves, 3);
+        CHECK(st.bytes == 32 + 32 * w);
+        bsp_query *q = bsp_query_create(a);
+        bsp_ray r = {bsp_v3(25, 0, 0), bsp_v3(-1, 0, 0), 0.0, INFINITY};
+        bsp_hit h;
+        REQUIRE(bsp_intersect(a, q, &r, &h));
+        CHECK_EQ_INT((int)h.prim, 2);
+        CHECK_NEAR(h.t, 4.0, 1e-12);
+        r.org = bsp_v3(5, -5, 0); /* between the spheres, across the row */
+        r.dir = bsp_v3(0, 1, 0);
+        CHECK(!bsp_intersect(a, q, &r, &h));
+        bsp_query_destroy(q);
+        bvh *b = a->impl;
+        unsigned char *node = bvh_wide_node(b, 0);
+        REQUIRE(b->width == w && bvh_wide_index(node, w, 2) != BVH_NONE);
+        for (unsigned c = 3; c < w; c++)
+            CHECK(bvh_wide_index(node, w, c) == BVH_NONE && bvh_wide_meta(node, w, c) == 0);
+        bvh_node lane = bvh_wide_get(node, w, w - 1);
+        lane.lo[1] = 0.0f;
+        bvh_wide_set(node, w, w - 1, &lane);
+        CHECK(bsp_accel_check(a, &err) == BSP_ERR_INVALID);
+        CHECK_STR_CONTAINS(err.message, "wide node");
+        bsp_accel_destroy(a);
+    }
     bsp_scene_destroy(s);
 }
 
@@ -263,8 +282,9 @@ static double next_u(uint64_t *rng)
  * component; the rays aimed at the vertices of small triangles, which make
  * the faces of the boxes (where a slab test's error would lose a hit), at
  * points on their edges, and inside them; occlusion queries too. */
-TEST(bvh4_float_and_double_paths_match_naive)
+TEST(bvh_wide_float_and_double_paths_match_naive)
 {
+    for (size_t wk = 0; wk < sizeof wide_kinds / sizeof wide_kinds[0]; wk++) {
     bsp_scene *s = bsp_scene_create();
     bsp_error err;
     enum { NTRI = 1500 };
@@ -281,7 +301,7 @@ TEST(bvh4_float_and_double_paths_match_naive)
         }
         REQUIRE(bsp_scene_add_polygon(s, &v[3 * i], 3, &err) == BSP_OK);
     }
-    bsp_accel *a = bvh_kind_of(s, BSP_ACCEL_BVH4, 0, 0);
+    bsp_accel *a = bvh_kind_of(s, wide_kinds[wk].kind, 0, 0);
     bsp_build_options o;
     bsp_build_options_defaults(&o);
     o.kind = BSP_ACCEL_NAIVE;
@@ -336,8 +356,8 @@ TEST(bvh4_float_and_double_paths_match_naive)
         if (xa != xn || (xn && (ha.prim != hn.prim || ha.t != hn.t)) ||
             bsp_occluded(a, qa, &r) != bsp_occluded(nv, qn, &r)) {
             bad++;
-            CHECK_MSG(0, "ray %d (case %d, length %g): bvh4 %d prim %u t %.17g, naive %d prim %u t %.17g",
-                      i, kase, len, xa, ha.prim, ha.t, xn, hn.prim, hn.t);
+            CHECK_MSG(0, "ray %d (case %d, length %g): width %u %d prim %u t %.17g, naive %d prim %u t %.17g",
+                      i, kase, len, wide_kinds[wk].width, xa, ha.prim, ha.t, xn, hn.prim, hn.t);
         }
     }
     CHECK(bad == 0);
@@ -347,6 +367,7 @@ TEST(bvh4_float_and_double_paths_match_naive)
     bsp_accel_destroy(nv);
     bsp_accel_destroy(a);
     bsp_scene_destroy(s);
+    }
 }
 
 /* The threaded build (bvh_build.c: subtrees deferred as tasks) gives the
@@ -363,12 +384,13 @@ TEST(bvh_build_is_deterministic)
         bsp_error err;
         REQUIRE_MSG(bsp_scene_load(specs[i], &s, &err) == BSP_OK, "%s", err.message);
         REQUIRE(bsp_scene_prim_count(s) >= 2 * 4096);
-        for (int wide = 0; wide < 2; wide++) {
+        for (size_t kind = 0; kind < sizeof bvh_kinds / sizeof bvh_kinds[0]; kind++) {
+            const char *name = bsp_accel_kind_name(bvh_kinds[kind]);
             bsp_accel *acc[2];
             for (int v = 0; v < 2; v++) {
                 bsp_build_options o;
                 bsp_build_options_defaults(&o);
-                o.kind = wide ? BSP_ACCEL_BVH4 : BSP_ACCEL_BVH;
+                o.kind = bvh_kinds[kind];
                 o.threads = v ? 3 : 1;
                 REQUIRE_MSG(bsp_accel_build(s, &o, &acc[v], &err) == BSP_OK, "%s", err.message);
                 CHECK_MSG(bsp_accel_check(acc[v], &err) == BSP_OK, "%s", err.message);
@@ -376,12 +398,13 @@ TEST(bvh_build_is_deterministic)
             const bvh *a = acc[0]->impl, *b = acc[1]->impl;
             REQUIRE(a->nnodes == b->nnodes && a->nrec == b->nrec && a->width == b->width);
             CHECK(memcmp(&a->root, &b->root, sizeof a->root) == 0);
-            const size_t node_bytes =
-                wide ? (a->nnodes - 1) / 4 * sizeof(bvh_quad) : (a->nnodes - 2) / 2 * sizeof(bvh_pair);
-            const void *na = wide ? (const void *)a->quads : (const void *)a->pairs;
-            const void *nb = wide ? (const void *)b->quads : (const void *)b->pairs;
+            const int wide = a->width != 2;
+            const size_t node_bytes = wide ? (a->nnodes - 1) / a->width * BVH_WIDE_BYTES(a->width)
+                                           : (a->nnodes - 2) / 2 * sizeof(bvh_pair);
+            const void *na = wide ? (const void *)a->wide : (const void *)a->pairs;
+            const void *nb = wide ? (const void *)b->wide : (const void *)b->pairs;
             CHECK_MSG(memcmp(na, nb, node_bytes) == 0, "%s %s: node arrays differ", specs[i],
-                      wide ? "bvh4" : "bvh");
+                      name);
             uint32_t differ = 0;
             for (uint32_t r = 0; r < a->nrec; r++)
                 differ += a->rec[r].prim != b->rec[r].prim;
@@ -414,8 +437,8 @@ TEST(bvh_build_is_deterministic)
                 bad += xa != xn || (xn && (ha.prim != hn.prim || ha.t != hn.t)) ||
                        bsp_occluded(acc[1], qa, &r) != bsp_occluded(nv, qn, &r);
             }
-            CHECK_MSG(bad == 0, "%s %s: %d of 3000 rays differ from naive", specs[i],
-                      wide ? "bvh4" : "bvh", bad);
+            CHECK_MSG(bad == 0, "%s %s: %d of 3000 rays differ from naive", specs[i], name,
+                      bad);
             CHECK_MSG(hits > 300, "%s: only %d rays hit", specs[i], hits);
             bsp_query_destroy(qa);
             bsp_query_destroy(qn);

@@ -971,7 +971,7 @@ TEST(cli_bench_names_the_cells_variants)
     free(out);
     snprintf(cmd, sizeof cmd, "%s render spd:balls:1 --accel octree-centre 2>&1", harness_cli());
     CHECK_RUN(cmd, 2, "(known: naive, kaplan, sah, sah-per, sah-par, sah-mixed, grid, octree, "
-                      "bvh, bvh4, octree-cost, grid-bounds, grid-rec)");
+                      "bvh, bvh4, bvh8, octree-cost, grid-bounds, grid-rec)");
 }
 
 /* render --pixel-order: tiles and rows write the same image (compared byte

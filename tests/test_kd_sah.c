@@ -592,7 +592,7 @@ static bsp_ray face_ray(const bvh *b, bsp_box box)
         return r;
     uint32_t i = (uint32_t)(rnd() * b->nnodes) % b->nnodes;
     bvh_node n = bvh_get(b, i == 1 && b->width == 2 ? 0 : i); /* id 1 is unused */
-    if (n.index == BVH_NONE) /* a quad's unused lane */
+    if (n.index == BVH_NONE) /* a wide node's unused lane */
         n = bvh_get(b, 0);
     unsigned axis = (unsigned)(rnd() * 3) % 3;
     r.org.v[axis] = rnd() < 0.5 ? (double)n.lo[axis] : (double)n.hi[axis];
@@ -625,8 +625,7 @@ static void check_exact_accel(const bsp_scene *s, const char *name, bsp_accel *c
     rng_state = seed;
     int bad = 0, hits = 0;
     for (int i = 0; i < nrays && bad < 5; i++) {
-        int is_bvh = bsp_accel_get_kind(acc[0]) == BSP_ACCEL_BVH ||
-                     bsp_accel_get_kind(acc[0]) == BSP_ACCEL_BVH4;
+        int is_bvh = accel_is_bvh(bsp_accel_get_kind(acc[0]));
         bsp_ray r = rnd() >= 0.1 ? random_ray(box)
                     : is_bvh     ? face_ray(acc[0]->impl, box)
                                  : plane_ray(tree_of(acc[0]), box);
@@ -1062,6 +1061,8 @@ TEST(sah_exact_stress_non_planar_polygons)
     check_exact_opts(s, "non-planar polygons, bvh", bvh_opts, ray_count(20000), 408);
     bvh_opts.kind = BSP_ACCEL_BVH4;
     check_exact_opts(s, "non-planar polygons, bvh4", bvh_opts, ray_count(20000), 409);
+    bvh_opts.kind = BSP_ACCEL_BVH8;
+    check_exact_opts(s, "non-planar polygons, bvh8", bvh_opts, ray_count(20000), 410);
     bsp_scene_destroy(s);
 }
 
@@ -1393,7 +1394,7 @@ TEST(kd_exact_subnormal_directions)
         add_sphere(s, v3_scale(c, -1.0), rnd_in(0.05, 0.6)); /* symmetric bounds */
     }
     add_tri(s, bsp_v3(0, -3, -3), bsp_v3(0, 3, -3), bsp_v3(0, 0, 3)); /* in the plane x = 0 */
-    bsp_build_options kinds[4];
+    bsp_build_options kinds[5];
     bsp_build_options_defaults(&kinds[0]);
     kinds[0].kind = BSP_ACCEL_KAPLAN;
     kinds[1] = sah_options();
@@ -1401,13 +1402,15 @@ TEST(kd_exact_subnormal_directions)
     kinds[2].kind = BSP_ACCEL_BVH; /* 1 / d infinite in its slab tests */
     bsp_build_options_defaults(&kinds[3]);
     kinds[3].kind = BSP_ACCEL_BVH4; /* likewise, in float lanes */
+    bsp_build_options_defaults(&kinds[4]);
+    kinds[4].kind = BSP_ACCEL_BVH8;
     bsp_build_options nv;
     bsp_build_options_defaults(&nv);
     nv.kind = BSP_ACCEL_NAIVE;
     bsp_accel *naive = build(s, &nv);
     bsp_query *qn = bsp_query_create(naive);
     int mismatches = 0, hits = 0;
-    for (int kd = 0; kd < 4; kd++) {
+    for (int kd = 0; kd < 5; kd++) {
         bsp_accel *acc = build(s, &kinds[kd]);
         bsp_query *q = bsp_query_create(acc);
         for (int i = 0; i < 20000; i++) {
@@ -1432,7 +1435,7 @@ TEST(kd_exact_subnormal_directions)
         bsp_query_destroy(q);
         bsp_accel_destroy(acc);
     }
-    CHECK_MSG(mismatches == 0, "%d of 60000 rays differ from naive", mismatches);
+    CHECK_MSG(mismatches == 0, "%d of 5 x 20000 rays differ from naive", mismatches);
     CHECK(hits > 1000);
     bsp_query_destroy(qn);
     bsp_accel_destroy(naive);

@@ -37,8 +37,8 @@ static double rnd_in(double lo, double hi)
 
 /* Split planes of a kd accel (interior nodes), for rays starting on them. */
 typedef struct plane_list {
-    unsigned axis[4608];
-    double value[4608];
+    unsigned axis[5120];
+    double value[5120];
     int n;
 } plane_list;
 
@@ -59,13 +59,13 @@ static void collect_planes(const bsp_accel *a, plane_list *pl, int limit)
                 }
         return;
     }
-    if (bsp_accel_get_kind(a) == BSP_ACCEL_BVH || bsp_accel_get_kind(a) == BSP_ACCEL_BVH4) {
+    if (accel_is_bvh(bsp_accel_get_kind(a))) {
         const bvh *b = a->impl; /* its boxes' faces */
         for (uint32_t i = 0; i < b->nnodes && pl->n + 6 <= limit;
              i += 1 + (i == 0 && b->width == 2)) { /* id 1 is unused */
             const bvh_node n = bvh_get(b, i);
             if (n.index == BVH_NONE)
-                continue; /* a quad's unused lane */
+                continue; /* a wide node's unused lane */
             for (unsigned k = 0; k < 3; k++) {
                 pl->axis[pl->n] = k;
                 pl->value[pl->n++] = n.lo[k];
@@ -249,9 +249,9 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
             break;
         }
     static const bsp_accel_kind regular[] = {BSP_ACCEL_GRID, BSP_ACCEL_OCTREE, BSP_ACCEL_BVH,
-                                             BSP_ACCEL_BVH4};
-    static const int upto[] = {3072, 3584, 4096, 4608};
-    for (int k = 0; k < 4; k++)
+                                             BSP_ACCEL_BVH4, BSP_ACCEL_BVH8};
+    static const int upto[] = {3072, 3584, 4096, 4608, 5120};
+    for (int k = 0; k < 5; k++)
         for (int v = nv - 1; v >= 0; v--)
             if (bsp_accel_get_kind(acc[v]) == regular[k]) {
                 collect_planes(acc[v], &g.planes, upto[k]);

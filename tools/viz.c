@@ -49,9 +49,9 @@ static const char viz_help[] =
     "                   binary PPM, anything else PNG (required)\n"
     "  --accel LIST     comma-separated methods, one row each: kaplan, sah, sah-per,\n"
     "                   sah-par, sah-mixed (default sah), octree, octree-cost, grid,\n"
-    "                   grid-bounds, grid-rec (see --grid-*), bvh or bvh4 (their camera\n"
-    "                   view draws every node's box, which may overlap, instead of\n"
-    "                   planes)\n"
+    "                   grid-bounds, grid-rec (see --grid-*), bvh, bvh4 or bvh8 (their\n"
+    "                   camera view draws every node's box, which may overlap, instead\n"
+    "                   of planes)\n"
     "  --max-depth N    the trees' maximum depth (default 10, the paper's setting for\n"
     "                   its pictures); also the end of the depth colour scale. An octree\n"
     "                   gets (N + 2) / 3 levels (three kd levels each)\n"
@@ -317,7 +317,8 @@ int cmd_viz(int argc, char **argv)
         /* camera view */
         draw_paste(panel, back, 0, 0);
         const int boxes = rows[r].method.kind == BSP_ACCEL_BVH ||
-                            rows[r].method.kind == BSP_ACCEL_BVH4; /* overlapping boxes */
+                          rows[r].method.kind == BSP_ACCEL_BVH4 ||
+                          rows[r].method.kind == BSP_ACCEL_BVH8; /* overlapping boxes */
         if (boxes)
             draw_panel_boxes(panel, &pin, c, max_depth);
         else

@@ -53,14 +53,17 @@ typedef enum bsp_accel_kind {
     BSP_ACCEL_BVH,       /* bounding volume hierarchy: binary, object partitioning, binned
                             SAH (Wald 2007) with the kd-trees' per-kind costs T_i and
                             C_trav twice theirs (sah_costs.traversal, default 1);
-                            the structure most ray tracers use, for comparison. One
-                            build thread; max_leaf_prims (default 8) and max_depth
+                            the structure most ray tracers use, for comparison.
+                            Threads as the sah family's; max_leaf_prims (default 8) and max_depth
                             (default and at most 60) bound its leaves, which may
                             exceed max_leaf_prims only where their centroids
                             coincide; the mailbox does not apply */
     BSP_ACCEL_BVH4,      /* the same BVH collapsed to four children per node (Embree's
                             layout), whose four boxes a ray tests at once in float
                             SIMD lanes; exact like every structure here */
+    BSP_ACCEL_BVH8,      /* ... to eight children per node (what Embree builds for
+                            triangles on CPUs with AVX), their boxes tested four at
+                            a time in float SIMD lanes */
     BSP_ACCEL_KIND_COUNT
 } bsp_accel_kind;
 

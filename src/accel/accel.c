@@ -14,7 +14,7 @@
 #include "accel/kd_tree.h"
 
 static const char *const kind_names[BSP_ACCEL_KIND_COUNT] = {
-    "naive", "kaplan", "sah", "sah-per", "sah-par", "sah-mixed", "grid", "octree", "bvh", "bvh4"};
+    "naive", "kaplan", "sah", "sah-per", "sah-par", "sah-mixed", "grid", "octree", "bvh", "bvh4", "bvh8"};
 
 size_t accel_max_bytes(const bsp_build_options *o)
 {
@@ -102,6 +102,7 @@ bsp_status bsp_accel_build(const bsp_scene *scene, const bsp_build_options *opts
         break;
     case BSP_ACCEL_BVH:
     case BSP_ACCEL_BVH4:
+    case BSP_ACCEL_BVH8:
         st = bvh_build(a, err);
         break;
     default:
@@ -161,7 +162,7 @@ void bsp_accel_tree_stats(const bsp_accel *a, bsp_tree_stats *st)
         grid_stats(a->impl, st);
         return;
     }
-    if (a->opts.kind == BSP_ACCEL_BVH || a->opts.kind == BSP_ACCEL_BVH4) {
+    if (accel_is_bvh(a->opts.kind)) {
         bvh_stats(a->impl, a->scene, st);
         return;
     }
@@ -176,7 +177,7 @@ bsp_status bsp_accel_check(const bsp_accel *a, bsp_error *err)
         return BSP_OK;
     if (a->opts.kind == BSP_ACCEL_GRID)
         return grid_check(a->impl, a->scene, err);
-    if (a->opts.kind == BSP_ACCEL_BVH || a->opts.kind == BSP_ACCEL_BVH4)
+    if (accel_is_bvh(a->opts.kind))
         return bvh_check(a->impl, a->scene, err);
     return kd_tree_check(a->impl, a->scene, err);
 }
@@ -189,7 +190,7 @@ bsp_status bsp_accel_visit_cells(const bsp_accel *a, int max_depth,
         return BSP_OK;
     if (a->opts.kind == BSP_ACCEL_GRID)
         return grid_visit(a->impl, max_depth, visit, ctx);
-    if (a->opts.kind == BSP_ACCEL_BVH || a->opts.kind == BSP_ACCEL_BVH4)
+    if (accel_is_bvh(a->opts.kind))
         return bvh_visit(a->impl, max_depth, visit, ctx);
     return kd_tree_visit(a->impl, max_depth, visit, ctx, err);
 }

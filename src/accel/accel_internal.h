@@ -83,4 +83,10 @@ HIDDEN size_t accel_max_bytes(const bsp_build_options *o);
 /* Seconds on a monotonic clock. */
 HIDDEN double accel_now(void);
 
+/* Whether KIND is one of the BVHs (bvh.h): binary, four- or eight-wide. */
+static inline int accel_is_bvh(bsp_accel_kind kind)
+{
+    return kind == BSP_ACCEL_BVH || kind == BSP_ACCEL_BVH4 || kind == BSP_ACCEL_BVH8;
+}
+
 #endif /* BSPRAY_ACCEL_INTERNAL_H */

@@ -15,15 +15,17 @@
  * leaf is `count` records from `index`. Every live primitive is in exactly
  * one leaf: no mailbox is needed, and none is used.
  *
- * Four-wide (`--accel bvh4`, width 4): the same binary build, then each
- * node takes up to four descendants as its children (the interior child of
- * the largest surface area opened first, Embree's collapse) in a 128-byte
- * quad (bvh_quad) whose four boxes a ray tests at once in SSE's four float
- * lanes. The root is kept apart as before; child c of quad q is node id
- * 1 + 4q + c, an interior node's `index` is its quad, and the lanes a quad
- * does not use hold index BVH_NONE, meta 0 and the box +inf..-inf on every
- * axis (its entry is +inf and its exit -inf for every ray: no 0 x inf or
- * inf - inf arises with a finite origin).
+ * Wide (`--accel bvh4`, width 4; `--accel bvh8`, width 8): the same binary
+ * build, then each node takes up to W descendants as its children (the
+ * interior child of the largest surface area opened first, Embree's
+ * collapse) in a wide node of 32 W bytes (bvh_wide_*: the W boxes axis by
+ * axis, lo on axis k at floats kW..kW+W-1, hi at (3+k)W.., then W indices
+ * and W metas), whose boxes a ray tests four at a time in SSE's float
+ * lanes. The root is kept apart as before; child c of wide node q is node
+ * id 1 + Wq + c, an interior node's `index` is its wide node, and the
+ * lanes a node does not use hold index BVH_NONE, meta 0 and the box
+ * +inf..-inf on every axis (its entry is +inf and its exit -inf for every
+ * ray: no 0 x inf or inf - inf arises with a finite origin).
  *
  * Exactness invariant: a node's box contains the bounds of every primitive
  * below it grown by `pad` (KD_PAD_REL times the scene scale: four times the
@@ -36,8 +38,8 @@
  * with tmax = best t and the lower index winning at equal t gives the naive
  * method's answer. Rays outside the domain take the naive loop.
  *
- * The four-wide tests run in float (bvh4_traverse.c), whose rounding is far
- * coarser, so that tree's pad is larger, BVH4_PAD_REL M (M the largest
+ * The wide trees' tests run in float (bvh_wide_traverse.c), whose rounding
+ * is far coarser, so their pad is larger, BVH_WIDE_PAD_REL M (M the largest
  * |coordinate| of the scene's bounds; the kd-trees' pad if that is more),
  * and its float tests serve the origins with every |o_k| <= 2^19 pad - M
  * (`float_origin`; other rays of the domain take the same walk with double
@@ -67,13 +69,16 @@
 #define BVH_TRAVERSAL_COST 2.0
 /* Centroid bins per axis of the binned SAH. */
 #define BVH_BINS 16
-/* The four-wide tree's bounds padding: 2^-14 M, M the largest |coordinate|
- * of the scene's bounds (at least the kd-trees' pad), and the largest |o_k|
- * its float slab tests take: 2^19 pads less M (see above). */
-#define BVH4_PAD_REL (1.0 / 16384.0)
-#define BVH4_FLOAT_ORIGIN_PADS 524288.0
-/* A quad's unused lane. */
+/* The wide trees' bounds padding: 2^-14 M, M the largest |coordinate| of
+ * the scene's bounds (at least the kd-trees' pad), and the largest |o_k|
+ * their float slab tests take: 2^19 pads less M (see above). */
+#define BVH_WIDE_PAD_REL (1.0 / 16384.0)
+#define BVH_WIDE_FLOAT_ORIGIN_PADS 524288.0
+/* A wide node's unused lane. */
 #define BVH_NONE UINT32_MAX
+/* The widest node (bvh8), and a wide node's bytes. */
+#define BVH_WIDEST 8u
+#define BVH_WIDE_BYTES(w) (32u * (w))
 
 typedef struct bvh_node {
     float lo[3], hi[3]; /* the box, rounded outward from the padded doubles */
@@ -89,15 +94,6 @@ typedef struct bvh_pair {
 
 _Static_assert(sizeof(bvh_pair) == 64, "a BVH pair is one 64-byte line");
 
-/* Up to four children of one node (width 4): child c's box is
- * lo[k][c]..hi[k][c] on axis k; the children in use come first. */
-typedef struct bvh_quad {
-    float lo[3][4], hi[3][4];
-    uint32_t index[4], meta[4]; /* as bvh_node's; unused: BVH_NONE, 0 */
-} bvh_quad;
-
-_Static_assert(sizeof(bvh_quad) == 128, "a BVH quad is two 64-byte lines");
-
 #define BVH_COUNT(n) ((n)->meta >> 2)
 #define BVH_AXIS(n) ((n)->meta & 3u)
 /* The most primitives one leaf may count (meta's 30 bits). */
@@ -105,38 +101,77 @@ _Static_assert(sizeof(bvh_quad) == 128, "a BVH quad is two 64-byte lines");
 
 typedef struct bvh {
     bvh_node root;
-    unsigned width;  /* 2: the nodes lie in pairs; 4: in quads */
+    unsigned width;  /* 2: the nodes lie in pairs; 4 or 8: in wide nodes */
     bvh_pair *pairs; /* width 2: 64-byte aligned, inside nodes_block */
-    bvh_quad *quads; /* width 4: likewise */
+    unsigned char *wide; /* width 4 or 8: likewise, BVH_WIDE_BYTES(width) each */
     void *nodes_block;
     /* node ids in use + 1: 0, no live primitive; else 2 + 2 x pairs (id 1
-     * unused), or 1 + 4 x quads (their unused lanes included) */
+     * unused), or 1 + W x wide nodes (their unused lanes included) */
     uint32_t nnodes;
     kd_local *rec;  /* nrec records in leaf order */
     uint32_t nrec;
-    double pad;     /* the bounds padding (KD_PAD_REL or BVH4_PAD_REL x scene scale) */
-    double float_origin; /* width 4: the float tests take |o_k| up to this (< 0: none) */
+    double pad;     /* the bounds padding (KD_PAD_REL or BVH_WIDE_PAD_REL x scene scale) */
+    double float_origin; /* width 4, 8: the float tests take |o_k| up to this (< 0: none) */
     bsp_sah_costs costs; /* the build's cost model: C_trav (traversal) and T_i by kind */
 } bvh;
 
+/* Wide node Q of T (width 4 or 8), and its lane C's parts (memcpy: the
+ * bytes hold floats and integers side by side). */
+static inline unsigned char *bvh_wide_node(const bvh *t, uint32_t q)
+{
+    return t->wide + (size_t)q * BVH_WIDE_BYTES(t->width);
+}
+static inline float bvh_wide_lo(const unsigned char *n, unsigned w, unsigned k, unsigned c)
+{
+    float f;
+    memcpy(&f, n + 4 * (k * w + c), sizeof f);
+    return f;
+}
+static inline float bvh_wide_hi(const unsigned char *n, unsigned w, unsigned k, unsigned c)
+{
+    return bvh_wide_lo(n, w, 3 + k, c);
+}
+static inline uint32_t bvh_wide_index(const unsigned char *n, unsigned w, unsigned c)
+{
+    uint32_t u;
+    memcpy(&u, n + 4 * (6 * w + c), sizeof u);
+    return u;
+}
+static inline uint32_t bvh_wide_meta(const unsigned char *n, unsigned w, unsigned c)
+{
+    return bvh_wide_index(n, w, w + c);
+}
+/* Lane C of wide node N (width W) as a node, and set from X. */
+static inline bvh_node bvh_wide_get(const unsigned char *n, unsigned w, unsigned c)
+{
+    bvh_node x;
+    for (unsigned k = 0; k < 3; k++) {
+        x.lo[k] = bvh_wide_lo(n, w, k, c);
+        x.hi[k] = bvh_wide_hi(n, w, k, c);
+    }
+    x.index = bvh_wide_index(n, w, c);
+    x.meta = bvh_wide_meta(n, w, c);
+    return x;
+}
+static inline void bvh_wide_set(unsigned char *n, unsigned w, unsigned c, const bvh_node *x)
+{
+    for (unsigned k = 0; k < 3; k++) {
+        memcpy(n + 4 * (k * w + c), &x->lo[k], sizeof(float));
+        memcpy(n + 4 * ((3 + k) * w + c), &x->hi[k], sizeof(float));
+    }
+    memcpy(n + 4 * (6 * w + c), &x->index, sizeof(uint32_t));
+    memcpy(n + 4 * (7 * w + c), &x->meta, sizeof(uint32_t));
+}
+
 /* Node ID of T (0 the root; width 2: 2 + 2p + c child c of pair p; width
- * 4: 1 + 4q + c child c of quad q). */
+ * 4 or 8: 1 + Wq + c child c of wide node q). */
 static inline bvh_node bvh_get(const bvh *t, uint32_t id)
 {
     if (id == 0)
         return t->root;
+    if (t->width != 2)
+        return bvh_wide_get(bvh_wide_node(t, (id - 1) / t->width), t->width, (id - 1) % t->width);
     bvh_node n;
-    if (t->width == 4) {
-        const bvh_quad *q = &t->quads[(id - 1) >> 2];
-        unsigned c = (id - 1) & 3u;
-        for (unsigned k = 0; k < 3; k++) {
-            n.lo[k] = q->lo[k][c];
-            n.hi[k] = q->hi[k][c];
-        }
-        n.index = q->index[c];
-        n.meta = q->meta[c];
-        return n;
-    }
     const bvh_pair *p = &t->pairs[(id - 2) >> 1];
     unsigned c = id & 1u;
     for (unsigned k = 0; k < 3; k++) {
@@ -149,7 +184,7 @@ static inline bvh_node bvh_get(const bvh *t, uint32_t id)
 }
 
 /* The float after / before F (F finite; at +-FLT_MAX, +-inf). Inline:
- * libm's nextafterf is a call, and the four-wide walk rounds after every
+ * libm's nextafterf is a call, and the wide walks round after every
  * leaf that hits. */
 static inline float bvh_float_step(float f, int up)
 {
@@ -176,17 +211,18 @@ static inline float bvh_float_up(double x)
 }
 
 /* The ids of interior node N's children in IDS (left to right), and how
- * many it has: 2, or (width 4) the lanes of its quad in use. */
-static inline unsigned bvh_children(const bvh *t, const bvh_node *n, uint32_t ids[4])
+ * many it has: 2, or (width 4, 8) the lanes of its wide node in use. */
+static inline unsigned bvh_children(const bvh *t, const bvh_node *n, uint32_t ids[BVH_WIDEST])
 {
-    if (t->width != 4) {
+    if (t->width == 2) {
         ids[0] = n->index;
         ids[1] = n->index + 1;
         return 2;
     }
+    const unsigned char *w = bvh_wide_node(t, n->index);
     unsigned c = 0;
-    while (c < 4 && t->quads[n->index].index[c] != BVH_NONE) {
-        ids[c] = 1 + 4 * n->index + c;
+    while (c < t->width && bvh_wide_index(w, t->width, c) != BVH_NONE) {
+        ids[c] = 1 + t->width * n->index + c;
         c++;
     }
     return c;
@@ -214,13 +250,13 @@ HIDDEN bsp_status bvh_check(const bvh *b, const bsp_scene *scene, bsp_error *err
 HIDDEN bsp_status bvh_visit(const bvh *b, int max_depth,
                             int (*visit)(const bsp_cell_info *cell, void *ctx), void *ctx);
 
-/* The queries (bvh_traverse.c; width 4: bvh4_traverse.c). */
+/* The queries (bvh_traverse.c; width 4 and 8: bvh_wide_traverse.c). */
 HIDDEN int bvh_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
                          bsp_hit *hit);
 HIDDEN int bvh_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from);
-HIDDEN int bvh4_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
-                          bsp_hit *hit);
-HIDDEN int bvh4_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from);
+HIDDEN int bvh_wide_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray,
+                              uint32_t from, bsp_hit *hit);
+HIDDEN int bvh_wide_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from);
 
 HIDDEN void bvh_destroy(void *impl);
 

@@ -11,8 +11,8 @@
  * (bsp_build_options.max_leaf_prims, default BVH_LEAF_MAX). Centroids that
  * all coincide are halved in index order; a node at max_depth (default and
  * at most BVH_MAX_DEPTH) is a leaf. O(N log N) for a tree of logarithmic
- * depth. The four-wide tree (`--accel bvh4`) is this binary tree collapsed
- * (collapse_node). Layout and exactness: bvh.h.
+ * depth. The wide trees (`--accel bvh4`, `bvh8`) are this binary tree
+ * collapsed (collapse_node). Layout and exactness: bvh.h.
  *
  * Threads (bsp_build_options.threads): in a scene of at least
  * 2 BVH_TASK_FLOOR primitives, the calling thread builds the top of the
@@ -320,16 +320,17 @@ static int splice_tasks(builder *b)
     return ok;
 }
 
-/* The children of binary node N (interior) that node's quad takes, in
- * KIDS, left to right: its two, then, while fewer than four, the interior
- * one of the largest surface area replaced by its two (Embree's collapse).
- * Returns how many. */
-static unsigned quad_children(const bvh *bin, const bvh_node *n, bvh_node kids[4])
+/* The children of binary node N (interior) that its wide node (width W)
+ * takes, in KIDS, left to right: its two, then, while fewer than W, the
+ * interior one of the largest surface area replaced by its two (Embree's
+ * collapse). Returns how many. */
+static unsigned wide_children(const bvh *bin, const bvh_node *n, unsigned w,
+                              bvh_node kids[BVH_WIDEST])
 {
     unsigned m = 2;
     kids[0] = bvh_get(bin, n->index);
     kids[1] = bvh_get(bin, n->index + 1);
-    while (m < 4) {
+    while (m < w) {
         int open = -1;
         double most = -1.0;
         for (unsigned i = 0; i < m; i++) {
@@ -357,54 +358,53 @@ static unsigned quad_children(const bvh *bin, const bvh_node *n, bvh_node kids[4
     return m;
 }
 
-/* Collapses the subtree of binary node N (interior) of BIN into quads from
- * *NQ on, depth first, a quad before its children's (QUADS NULL: counts
- * them only); returns N's quad. The leaves keep their left-to-right order,
- * so the records stay in leaf order. */
-static uint32_t collapse_node(const bvh *bin, const bvh_node *n, bvh_quad *quads, uint32_t *nq)
+/* Collapses the subtree of binary node N (interior) of BIN into wide nodes
+ * of width W from *NQ on, in the block NODES, depth first, a node before
+ * its children's (NODES NULL: counts them only); returns N's wide node.
+ * The leaves keep their left-to-right order, so the records stay in leaf
+ * order. */
+static uint32_t collapse_node(const bvh *bin, const bvh_node *n, unsigned w,
+                              unsigned char *nodes, uint32_t *nq)
 {
-    bvh_node kids[4];
-    unsigned m = quad_children(bin, n, kids);
+    bvh_node kids[BVH_WIDEST];
+    unsigned m = wide_children(bin, n, w, kids);
     uint32_t me = (*nq)++;
-    bvh_quad *q = quads ? &quads[me] : NULL;
-    for (unsigned c = 0; q && c < 4; c++) {
-        for (unsigned k = 0; k < 3; k++) {
-            q->lo[k][c] = c < m ? kids[c].lo[k] : INFINITY;
-            q->hi[k][c] = c < m ? kids[c].hi[k] : -INFINITY;
-        }
-        q->index[c] = c < m ? kids[c].index : BVH_NONE;
-        q->meta[c] = c < m ? kids[c].meta : 0;
-    }
+    unsigned char *q = nodes ? nodes + (size_t)me * BVH_WIDE_BYTES(w) : NULL;
+    const bvh_node unused = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY},
+                             BVH_NONE, 0};
+    for (unsigned c = 0; q && c < w; c++)
+        bvh_wide_set(q, w, c, c < m ? &kids[c] : &unused);
     for (unsigned c = 0; c < m; c++) {
         if (BVH_COUNT(&kids[c]))
             continue;
-        uint32_t child = collapse_node(bin, &kids[c], quads, nq);
+        bvh_node child = kids[c];
+        child.index = collapse_node(bin, &kids[c], w, nodes, nq);
         if (q)
-            q->index[c] = child;
+            bvh_wide_set(q, w, c, &child);
     }
     return me;
 }
 
-/* Turns T's binary tree into its four-wide form (bvh.h): BSP_OK, or
+/* Turns T's binary tree into its wide form of width W (bvh.h): BSP_OK, or
  * BSP_ERR_NOMEM with T unchanged. */
-static bsp_status collapse(bvh *t)
+static bsp_status collapse(bvh *t, unsigned w)
 {
     uint32_t nq = 0;
     if (t->nnodes && !BVH_COUNT(&t->root))
-        collapse_node(t, &t->root, NULL, &nq);
-    void *block = bigmem_malloc((nq ? nq : 1) * sizeof(bvh_quad) + 63);
+        collapse_node(t, &t->root, w, NULL, &nq);
+    void *block = bigmem_malloc((nq ? nq : 1) * (size_t)BVH_WIDE_BYTES(w) + 63);
     if (!block)
         return BSP_ERR_NOMEM;
-    bvh_quad *quads = (bvh_quad *)(((uintptr_t)block + 63) & ~(uintptr_t)63);
+    unsigned char *nodes = (unsigned char *)(((uintptr_t)block + 63) & ~(uintptr_t)63);
     uint32_t filled = 0;
     if (nq)
-        t->root.index = collapse_node(t, &t->root, quads, &filled);
+        t->root.index = collapse_node(t, &t->root, w, nodes, &filled);
     free(t->nodes_block);
     t->nodes_block = block;
     t->pairs = NULL;
-    t->quads = quads;
-    t->width = 4;
-    t->nnodes = t->nnodes ? 1 + 4 * nq : 0;
+    t->wide = nodes;
+    t->width = w;
+    t->nnodes = t->nnodes ? 1 + w * nq : 0;
     return BSP_OK;
 }
 
@@ -419,7 +419,7 @@ void bvh_destroy(void *impl)
 }
 
 static const accel_ops bvh_ops = {bvh_intersect, bvh_occluded, bvh_destroy};
-static const accel_ops bvh4_ops = {bvh4_intersect, bvh4_occluded, bvh_destroy};
+static const accel_ops bvh_wide_ops = {bvh_wide_intersect, bvh_wide_occluded, bvh_destroy};
 
 static bsp_status bvh_oom(bsp_error *err)
 {
@@ -437,11 +437,14 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
         return error_set(err, BSP_ERR_LIMIT, NULL, 0,
                          "a BVH holds at most %u primitives, the scene has %zu",
                          (unsigned)BVH_MAX_PRIMS - 1, n);
-    const int wide = a->opts.kind == BSP_ACCEL_BVH4;
+    /* the wide trees' width, 0 for the binary one */
+    const unsigned wide = a->opts.kind == BSP_ACCEL_BVH8   ? 8
+                          : a->opts.kind == BSP_ACCEL_BVH4 ? 4
+                                                           : 0;
     const size_t npairs = n ? n - 1 : 0;
-    /* the four-wide tree: at most a quad per pair, made while the pairs live */
+    /* a wide tree: at most a wide node per pair, made while the pairs live */
     const size_t bytes =
-        npairs * (sizeof(bvh_pair) + (wide ? sizeof(bvh_quad) : 0)) + n * sizeof(kd_local);
+        npairs * (sizeof(bvh_pair) + (wide ? BVH_WIDE_BYTES(wide) : 0)) + n * sizeof(kd_local);
     const size_t limit = accel_max_bytes(&a->opts);
     if (limit && bytes > limit)
         return error_set(err, BSP_ERR_LIMIT, NULL, 0,
@@ -465,9 +468,9 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
         double m = 0.0;
         for (unsigned k = 0; k < 3 && !box_is_empty(s->bounds); k++)
             m = fmax(m, fmax(fabs(s->bounds.lo.v[k]), fabs(s->bounds.hi.v[k])));
-        t->pad = fmax(t->pad, BVH4_PAD_REL * m);
+        t->pad = fmax(t->pad, BVH_WIDE_PAD_REL * m);
         if (m <= 1e30)
-            t->float_origin = BVH4_FLOAT_ORIGIN_PADS * t->pad - m;
+            t->float_origin = BVH_WIDE_FLOAT_ORIGIN_PADS * t->pad - m;
     }
     t->costs = cm.c;
     builder b = {0};
@@ -529,7 +532,7 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
     }
     t->nnodes = b.nnodes;
     t->nrec = (uint32_t)n;
-    if (wide && collapse(t) != BSP_OK)
+    if (wide && collapse(t, wide) != BSP_OK)
         st = bvh_oom(err);
 done:
     free(bounds);
@@ -539,7 +542,7 @@ done:
         bvh_destroy(t);
         return st;
     }
-    a->ops = wide ? &bvh4_ops : &bvh_ops;
+    a->ops = wide ? &bvh_wide_ops : &bvh_ops;
     a->impl = t;
     return BSP_OK;
 }

@@ -36,7 +36,8 @@ static void walk_nodes(const bvh *b, int (*step)(void *ctx, uint32_t id, const b
     struct {
         uint32_t id;
         int depth;
-    } stack[3 * BVH_MAX_DEPTH + 4]; /* at most three pushed per level, beside the one taken */
+    } stack[(BVH_WIDEST - 1) * BVH_MAX_DEPTH + 4]; /* at most W - 1 pushed per level,
+                                                    * beside the one taken */
     unsigned sp = 0;
     stack[sp].id = 0;
     stack[sp++].depth = 0;
@@ -49,7 +50,7 @@ static void walk_nodes(const bvh *b, int (*step)(void *ctx, uint32_t id, const b
         if (go == WALK_STOP)
             return;
         if (go == WALK_DOWN && !BVH_COUNT(&n)) {
-            uint32_t ids[4];
+            uint32_t ids[BVH_WIDEST];
             for (unsigned c = bvh_children(b, &n, ids); c-- > 0;) { /* the right under the left */
                 stack[sp].id = ids[c];
                 stack[sp++].depth = depth + 1;
@@ -95,8 +96,10 @@ static int stats_step(void *ctx, uint32_t id, const bvh_node *n, int depth)
 void bvh_stats(const bvh *b, const bsp_scene *scene, bsp_tree_stats *st)
 {
     memset(st, 0, sizeof *st);
-    if (b->width == 4)
-        st->bytes = b->nnodes ? sizeof(bvh_node) + (uint64_t)(b->nnodes - 1) / 4 * sizeof(bvh_quad) : 0;
+    if (b->width != 2)
+        st->bytes = b->nnodes ? sizeof(bvh_node) + (uint64_t)(b->nnodes - 1) / b->width *
+                                                       BVH_WIDE_BYTES(b->width)
+                              : 0;
     else
         st->bytes = b->nnodes ? sizeof(bvh_node) + (uint64_t)(b->nnodes - 2) / 2 * sizeof(bvh_pair) : 0;
     st->trace_bytes = (uint64_t)b->nrec * sizeof(kd_local);
@@ -140,7 +143,7 @@ typedef struct check_walk {
     bsp_error *err;
     bsp_status st;
     unsigned char *seen;              /* per primitive: listed already */
-    uint32_t next_rec, visited, unused; /* unused: quads' lanes not in use */
+    uint32_t next_rec, visited, unused; /* unused: wide nodes' lanes not in use */
     bsp_box path[BVH_MAX_DEPTH + 1];  /* the boxes from the root to the node */
 } check_walk;
 
@@ -157,29 +160,32 @@ static int check_step(void *ctx, uint32_t id, const bvh_node *n, int depth)
     w->visited++;
     w->path[depth] = node_box(n);
     uint32_t cnt = BVH_COUNT(n);
-    if (!cnt && b->width == 4) {
-        /* quads after the node's own: each reached once, no cycle; two to
-         * four lanes in use, first, the others empty (+inf..-inf) */
-        uint32_t nq = (b->nnodes - 1) / 4, own = id ? (id - 1) / 4 : 0;
+    if (!cnt && b->width != 2) {
+        /* wide nodes after the node's own: each reached once, no cycle; two
+         * to W lanes in use, first, the others empty (+inf..-inf) */
+        const unsigned wd = b->width;
+        uint32_t nq = (b->nnodes - 1) / wd, own = id ? (id - 1) / wd : 0;
         int bad = depth >= BVH_MAX_DEPTH || n->index >= nq || (id && n->index <= own) ||
                   BVH_AXIS(n) > 2;
         unsigned used = 0;
-        for (unsigned c = 0; !bad && c < 4; c++) {
-            const bvh_quad *q = &b->quads[n->index];
-            if (q->index[c] != BVH_NONE) {
+        for (unsigned c = 0; !bad && c < wd; c++) {
+            const unsigned char *q = bvh_wide_node(b, n->index);
+            if (bvh_wide_index(q, wd, c) != BVH_NONE) {
                 bad |= used != c;
                 used++;
                 continue;
             }
-            bad |= q->meta[c] != 0;
+            bad |= bvh_wide_meta(q, wd, c) != 0;
             for (unsigned k = 0; k < 3; k++)
-                bad |= !(q->lo[k][c] == INFINITY && q->hi[k][c] == -INFINITY);
+                bad |= !(bvh_wide_lo(q, wd, k, c) == INFINITY &&
+                         bvh_wide_hi(q, wd, k, c) == -INFINITY);
         }
         if (bad || used < 2)
             return check_fail(w, error_set(w->err, BSP_ERR_INVALID, NULL, 0,
-                                           "BVH node %u: quad %u of %u (%u children), depth %d",
+                                           "BVH node %u: wide node %u of %u (%u children), "
+                                           "depth %d",
                                            id, n->index, nq, used, depth));
-        w->unused += 4 - used;
+        w->unused += wd - used;
         return WALK_DOWN;
     }
     if (!cnt) {
@@ -237,8 +243,8 @@ bsp_status bvh_check(const bvh *b, const bsp_scene *scene, bsp_error *err)
     if (!w.seen)
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory while checking the BVH");
     walk_nodes(b, check_step, &w);
-    /* every node but the unused slot 1 (width 2) or the quads' unused lanes */
-    uint32_t unused = b->width == 4 ? w.unused : 1;
+    /* every node but the unused slot 1 (width 2) or the wide nodes' unused lanes */
+    uint32_t unused = b->width != 2 ? w.unused : 1;
     if (w.st == BSP_OK && (w.next_rec != b->nrec || w.visited + unused != b->nnodes))
         w.st = error_set(err, BSP_ERR_INVALID, NULL, 0,
                          "BVH: %u of %u records and %u of %u nodes reached", w.next_rec,
@@ -268,7 +274,7 @@ static int visit_step(void *ctx, uint32_t id, const bvh_node *n, int depth)
     if (cnt) {
         c.refs = cnt;
     } else {
-        uint32_t ids[4];
+        uint32_t ids[BVH_WIDEST] = {0};
         bvh_children(w->b, n, ids);
         c.axis = BVH_AXIS(n);
         c.split = bvh_get(w->b, ids[1]).lo[c.axis];

@@ -201,7 +201,7 @@ bsp_status bsp_accel_save(const bsp_accel *a, const char *path, bsp_error *err)
         return error_set(err, BSP_ERR_INVALID, path, 0,
                          "the naive method has no structure to save");
     if (a->opts.kind == BSP_ACCEL_GRID || a->opts.kind == BSP_ACCEL_OCTREE ||
-        a->opts.kind == BSP_ACCEL_BVH || a->opts.kind == BSP_ACCEL_BVH4)
+        accel_is_bvh(a->opts.kind))
         return error_set(err, BSP_ERR_INVALID, path, 0,
                          "only the kd-trees of kaplan and the sah family are saved; this %s "
                          "is rebuilt instead (it builds in about the time a load takes)",

@@ -644,6 +644,7 @@ int main(int argc, char **argv)
         {"octree-cost", BSP_ACCEL_OCTREE, BSP_OCTREE_COST, 0, 0, 0},
         {"bvh", BSP_ACCEL_BVH, BSP_OCTREE_CENTRE, 0, 0, 0},
         {"bvh4", BSP_ACCEL_BVH4, BSP_OCTREE_CENTRE, 0, 0, 0},
+        {"bvh8", BSP_ACCEL_BVH8, BSP_OCTREE_CENTRE, 0, 0, 0},
     };
     static bsp_ray rays[NRAYS];
     static bsp_hit ref[NRAYS];
@@ -742,16 +743,17 @@ int main(int argc, char **argv)
      * thread builds them all) and on two. */
     {
         bsp_scene *s = load_with_reference("spd:tetra:7", rays, ref);
-        for (int wide = 0; wide < 2; wide++)
+        static const bsp_accel_kind bvhs[] = {BSP_ACCEL_BVH, BSP_ACCEL_BVH4, BSP_ACCEL_BVH8};
+        for (int b = 0; b < 3; b++)
             for (int threads = 1; threads <= 2; threads++) {
                 scenario sc = {.run = run_build,
                                .scene = s,
-                               .kind = wide ? BSP_ACCEL_BVH4 : BSP_ACCEL_BVH,
+                               .kind = bvhs[b],
                                .threads = threads,
                                .rays = rays,
                                .ref_hits = ref};
                 snprintf(sc.name, sizeof sc.name, "build %s+tasks%s spd:tetra:7",
-                         wide ? "bvh4" : "bvh", threads > 1 ? "+2threads" : "");
+                         bsp_accel_kind_name(bvhs[b]), threads > 1 ? "+2threads" : "");
                 sweep(&sc);
             }
         bsp_scene_destroy(s);

@@ -1,11 +1,12 @@
 /*
- * bvh4_traverse.c — closest-hit and any-hit queries on the four-wide BVH
- * (bvh.h, width 4). At a quad the ray's interval is clipped to its four
- * boxes at once; of the boxes met, the nearest is entered (a leaf is
- * tested) and the others are pushed with their entry t, farthest first. A
- * popped node is skipped when its entry lies beyond the best hit found
- * since: the entry computed is at most the t of any hit below it, so the
- * skip loses no hit, ties included.
+ * bvh_wide_traverse.c — closest-hit and any-hit queries on the wide BVHs
+ * (bvh.h, width W = 4 or 8). At a wide node the ray's interval is clipped
+ * to its W boxes, four at a time; of the boxes met, the nearest is entered
+ * (a leaf is tested) and the others are pushed with their entry t,
+ * farthest first. A popped node is skipped when its entry lies beyond the
+ * best hit found since: the entry computed is at most the t of any hit
+ * below it, so the skip loses no hit, ties included. Each width has a walk
+ * of its own (walk_wide with W constant), so the lanes' loops unroll.
  *
  * Float tests (SSE, four lanes) serve the rays whose origin lies within
  * t->float_origin on every axis (bvh.h: there a computed slab t is the
@@ -23,13 +24,13 @@
  * so no min or max is needed. A zero component gives +-inf, or NaN where the
  * origin lies exactly on a face, where the ray's line cannot hold an
  * accepted hit of the box (either answer is safe); an unused lane's box,
- * +inf..-inf, always misses (entry +inf, exit -inf). Entries on the stack are floats rounded down (in t'
- * units on the float path, t on the double one), compared with the best t
- * rounded up.
+ * +inf..-inf, always misses (entry +inf, exit -inf). Entries on the stack
+ * are floats rounded down (in t' units on the float path, t on the double
+ * one), compared with the best t rounded up.
  *
- * Counters: N_TS counts box tests, four per quad (one SIMD step, unused
- * lanes included) and one for the root, as the two-wide tree counts two per
- * pair; N_ETS the leaves entered; N_IT the primitives tested.
+ * Counters: N_TS counts box tests, W per wide node (unused lanes included)
+ * and one for the root, as the two-wide tree counts two per pair; N_ETS the
+ * leaves entered; N_IT the primitives tested.
  */
 #include <float.h>
 #include <math.h>
@@ -51,14 +52,14 @@ static inline double pow2(int e)
     return d;
 }
 
-typedef struct bvh4_ray {
+typedef struct wide_ray {
     double o[3], inv[3]; /* the double tests' (t units) */
-    unsigned near[3], far[3]; /* per axis, byte offsets in a quad of the near and far faces */
+    unsigned near[3], far[3]; /* per axis, byte offsets in a wide node of the near and far faces */
     double scale;        /* the float tests' t' = t scale, scale = 2^shift (1: double tests) */
 #if defined(__SSE2__)
     __m128 of[3], invf[3]; /* the float tests' origin and scaled 1 / d */
 #endif
-} bvh4_ray;
+} wide_ray;
 
 /* T in the walk's units (t' = t SCALE, exact but where it underflows),
  * rounded down / up to a float; a positive t never rounds up to 0. */
@@ -73,9 +74,9 @@ static inline float t_up(double t, double scale)
 }
 
 /* Prepares R's double tests for RAY and says whether RAY's [tmin, tmax]
- * meets T's root box (near and far faces as in the quads'): the rays that
+ * meets T's root box (near and far faces as in the wide nodes'): the rays that
  * miss it, half of a camera's on the dragon, pay nothing more. */
-static inline __attribute__((always_inline)) int bvh4_ray_root(bvh4_ray *r, const bvh *t,
+static inline __attribute__((always_inline)) int wide_ray_root(wide_ray *r, const bvh *t,
                                                                 const bsp_ray *ray)
 {
     const double *o = ray->org.v, *d = ray->dir.v;
@@ -83,8 +84,7 @@ static inline __attribute__((always_inline)) int bvh4_ray_root(bvh4_ray *r, cons
     for (unsigned k = 0; k < 3; k++) {
         r->o[k] = o[k];
         r->inv[k] = 1.0 / d[k];
-        const unsigned lo = (unsigned)(offsetof(bvh_quad, lo) + k * sizeof(float[4]));
-        const unsigned hi = (unsigned)(offsetof(bvh_quad, hi) + k * sizeof(float[4]));
+        const unsigned lo = 4 * k * t->width, hi = 4 * (3 + k) * t->width; /* bvh.h */
         const int neg = signbit(r->inv[k]);
         r->near[k] = neg ? hi : lo;
         r->far[k] = neg ? lo : hi;
@@ -98,7 +98,7 @@ static inline __attribute__((always_inline)) int bvh4_ray_root(bvh4_ray *r, cons
 }
 
 /* Prepares R's float tests for RAY when they may serve it (then 1). */
-static int bvh4_ray_float(bvh4_ray *r, const bvh *t, const bsp_ray *ray)
+static int wide_ray_float(wide_ray *r, const bvh *t, const bsp_ray *ray)
 {
     const double *o = ray->org.v, *d = ray->dir.v;
     double m = 0.0;
@@ -129,7 +129,7 @@ static int bvh4_ray_float(bvh4_ray *r, const bvh *t, const bsp_ray *ray)
 #endif
 }
 
-/* The ray's float tests' values, in locals of the walk (bvh4_ray's are
+/* The ray's float tests' values, in locals of the walk (wide_ray's are
  * __m128, which may alias any store, so the compiler would load them again
  * after every store of the loop). */
 typedef struct float_slabs {
@@ -139,15 +139,17 @@ typedef struct float_slabs {
     unsigned near0, near1, near2, far0, far1, far2;
 } float_slabs;
 
-/* Which of quad Q's boxes R's interval [T0, T1] (walk units) meets, as a
- * bit mask; E[c] is where it enters box c. The float tests take F. */
+/* Which of wide node Q's W boxes R's interval [T0, T1] (walk units) meets,
+ * as a bit mask; E[c] is where it enters box c. The float tests take F. */
 static inline __attribute__((always_inline)) unsigned
-quad_hit(const bvh_quad *q, const bvh4_ray *r, const float_slabs *f, double t0, double t1,
-         float t0f, float t1f, float e[4], int use_float)
+wide_hit(const unsigned char *q, unsigned w, const wide_ray *r, const float_slabs *f,
+         double t0, double t1, float t0f, float t1f, float e[BVH_WIDEST], int use_float)
 {
-    const char *base = (const char *)q;
 #if defined(__SSE2__)
     if (use_float) {
+        unsigned mask = 0;
+        for (unsigned g = 0; g < w; g += 4) { /* four lanes at a time */
+            const char *base = (const char *)q + 4 * g;
 #define SLAB(k)                                                                              \
     lo_t = _mm_max_ps(lo_t, _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(base + f->near##k)), \
                                                   f->of##k),                                 \
@@ -155,13 +157,15 @@ quad_hit(const bvh_quad *q, const bvh4_ray *r, const float_slabs *f, double t0, 
     hi_t = _mm_min_ps(hi_t, _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(base + f->far##k)),  \
                                                   f->of##k),                                 \
                                        f->invf##k))
-        __m128 lo_t = _mm_set1_ps(t0f), hi_t = _mm_set1_ps(t1f);
-        SLAB(0);
-        SLAB(1);
-        SLAB(2);
+            __m128 lo_t = _mm_set1_ps(t0f), hi_t = _mm_set1_ps(t1f);
+            SLAB(0);
+            SLAB(1);
+            SLAB(2);
 #undef SLAB
-        _mm_storeu_ps(e, lo_t);
-        return (unsigned)_mm_movemask_ps(_mm_cmple_ps(lo_t, hi_t));
+            _mm_storeu_ps(e + g, lo_t);
+            mask |= (unsigned)_mm_movemask_ps(_mm_cmple_ps(lo_t, hi_t)) << g;
+        }
+        return mask;
     }
 #else
     (void)f;
@@ -169,8 +173,9 @@ quad_hit(const bvh_quad *q, const bvh4_ray *r, const float_slabs *f, double t0, 
     (void)t1f;
     (void)use_float;
 #endif
+    const char *base = (const char *)q;
     unsigned mask = 0;
-    for (unsigned c = 0; c < 4; c++) {
+    for (unsigned c = 0; c < w; c++) {
         double a0 = t0, a1 = t1;
         for (unsigned k = 0; k < 3; k++) {
             const float *nf = (const float *)(base + r->near[k]);
@@ -187,24 +192,24 @@ quad_hit(const bvh_quad *q, const bvh4_ray *r, const float_slabs *f, double t0, 
 }
 
 /* The walk's stack: a node's index and meta (bvh.h) and its entry. One
- * quad pushes three at most, so three per level and the root suffice. */
-#define BVH4_STACK (3 * BVH_MAX_DEPTH + 2)
+ * wide node pushes W - 1 at most, so W - 1 per level and the root suffice. */
+#define WIDE_STACK ((BVH_WIDEST - 1) * BVH_MAX_DEPTH + 2)
 
-/* The walk of T, whose root's box R meets (bvh4_ray_root), for R over
- * [TMIN, C->tmax] (which shrinks as closest-hit leaves find hits), ANY:
- * stop at the first hit; returns 1 when it did. *TESTED counts the box
- * tests. Inlined per path (USE_FLOAT constant). */
+/* The walk of T (width W), whose root's box R meets (wide_ray_root), for R
+ * over [TMIN, C->tmax] (which shrinks as closest-hit leaves find hits),
+ * ANY: stop at the first hit; returns 1 when it did. *TESTED counts the box
+ * tests. Inlined per width and path (W and USE_FLOAT constant). */
 static inline __attribute__((always_inline)) int
-walk4(const bvh *t, const bvh4_ray *r, double tmin, query_state *c, int any, int use_float,
-      uint64_t *tested)
+walk_wide(const bvh *t, unsigned w, const wide_ray *r, double tmin, query_state *c, int any,
+          int use_float, uint64_t *tested)
 {
     const double sh = use_float ? r->scale : 1.0;
     const float tmin_f = t_down(tmin, sh);
     float best_f = t_up(c->tmax, sh);
-    uint32_t st_index[BVH4_STACK], st_meta[BVH4_STACK];
-    float st_entry[BVH4_STACK];
+    uint32_t st_index[WIDE_STACK], st_meta[WIDE_STACK];
+    float st_entry[WIDE_STACK];
     unsigned sp = 0;
-    uint64_t quads = 0; /* counted here, added to *TESTED at the end: the
+    uint64_t nodes = 0; /* counted here, added to *TESTED at the end: the
                          * loop keeps it in a register */
     int found = 0;
     uint32_t index = t->root.index, meta = t->root.meta;
@@ -213,6 +218,7 @@ walk4(const bvh *t, const bvh4_ray *r, double tmin, query_state *c, int any, int
         r->of[0], r->of[1], r->of[2], r->invf[0], r->invf[1], r->invf[2],
 #endif
         r->near[0], r->near[1], r->near[2], r->far[0], r->far[1], r->far[2]};
+    const size_t node_bytes = BVH_WIDE_BYTES(w);
     for (;;) {
         if (meta >> 2) { /* a leaf */
             double before = c->tmax;
@@ -223,20 +229,22 @@ walk4(const bvh *t, const bvh4_ray *r, double tmin, query_state *c, int any, int
             if (c->tmax != before)
                 best_f = t_up(c->tmax, sh);
         } else {
-            const bvh_quad *q = &t->quads[index];
-            float e[4];
-            unsigned hit = quad_hit(q, r, &f, tmin, c->tmax, tmin_f, best_f, e, use_float);
-            quads++;
+            const unsigned char *q = t->wide + (size_t)index * node_bytes;
+            /* the lanes' indices and metas (bvh.h), read as the walk needs them */
+            const unsigned char *qi = q + 4 * 6 * w, *qm = q + 4 * 7 * w;
+            float e[BVH_WIDEST];
+            unsigned hit = wide_hit(q, w, r, &f, tmin, c->tmax, tmin_f, best_f, e, use_float);
+            nodes++;
             if (hit) {
                 unsigned first = (unsigned)__builtin_ctz(hit);
                 hit &= hit - 1;
                 if (!hit) { /* one box met: enter it */
-                    index = q->index[first];
-                    meta = q->meta[first];
+                    memcpy(&index, qi + 4 * first, sizeof index);
+                    memcpy(&meta, qm + 4 * first, sizeof meta);
                     continue;
                 }
                 /* several: push them farthest first, enter the nearest */
-                unsigned lane[4], m = 0;
+                unsigned lane[BVH_WIDEST], m = 0;
                 lane[m++] = first;
                 while (hit) {
                     unsigned l = (unsigned)__builtin_ctz(hit);
@@ -247,12 +255,12 @@ walk4(const bvh *t, const bvh4_ray *r, double tmin, query_state *c, int any, int
                     lane[j] = l;
                 }
                 for (unsigned j = 0; j + 1 < m; j++) {
-                    st_index[sp] = q->index[lane[j]];
-                    st_meta[sp] = q->meta[lane[j]];
+                    memcpy(&st_index[sp], qi + 4 * lane[j], sizeof index);
+                    memcpy(&st_meta[sp], qm + 4 * lane[j], sizeof meta);
                     st_entry[sp++] = e[lane[j]];
                 }
-                index = q->index[lane[m - 1]];
-                meta = q->meta[lane[m - 1]];
+                memcpy(&index, qi + 4 * lane[m - 1], sizeof index);
+                memcpy(&meta, qm + 4 * lane[m - 1], sizeof meta);
                 continue;
             }
         }
@@ -264,20 +272,23 @@ walk4(const bvh *t, const bvh4_ray *r, double tmin, query_state *c, int any, int
         index = st_index[sp];
         meta = st_meta[sp];
     }
-    *tested += 4 * quads;
+    *tested += w * nodes;
     return found;
 }
 
-/* The walk on the path R allows. */
-static inline int walk_ray(const bvh *t, const bvh4_ray *r, int use_float, double tmin,
+/* The walk for T's width on the path R allows. */
+static inline int walk_ray(const bvh *t, const wide_ray *r, int use_float, double tmin,
                            query_state *c, int any, uint64_t *tested)
 {
-    return use_float ? walk4(t, r, tmin, c, any, 1, tested)
-                     : walk4(t, r, tmin, c, any, 0, tested);
+    if (t->width == 8)
+        return use_float ? walk_wide(t, 8, r, tmin, c, any, 1, tested)
+                         : walk_wide(t, 8, r, tmin, c, any, 0, tested);
+    return use_float ? walk_wide(t, 4, r, tmin, c, any, 1, tested)
+                     : walk_wide(t, 4, r, tmin, c, any, 0, tested);
 }
 
 /* Closest hit into HIT, or occlusion when HIT is NULL. */
-static inline __attribute__((always_inline)) int query4(const bsp_accel *a, bsp_query *q,
+static inline __attribute__((always_inline)) int query_wide(const bsp_accel *a, bsp_query *q,
                                                         const bsp_ray *ray, uint32_t from,
                                                         bsp_hit *hit)
 {
@@ -285,12 +296,12 @@ static inline __attribute__((always_inline)) int query4(const bsp_accel *a, bsp_
     if (query_without_walk(a, q, ray, from, hit, &out))
         return out;
     const bvh *t = a->impl;
-    bvh4_ray r;
-    if (!bvh4_ray_root(&r, t, ray)) {
+    wide_ray r;
+    if (!wide_ray_root(&r, t, ray)) {
         query_count(q, 1, 0, 0, 0, 0, 0); /* the root's box */
         return 0;
     }
-    int fl = bvh4_ray_float(&r, t, ray);
+    int fl = wide_ray_float(&r, t, ray);
     query_state c;
     query_start(&c, a->scene, t, ray, from);
     uint64_t tested = 1;
@@ -299,13 +310,13 @@ static inline __attribute__((always_inline)) int query4(const bsp_accel *a, bsp_
     return hit ? closest : found;
 }
 
-int bvh4_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
-                   bsp_hit *hit)
+int bvh_wide_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
+                       bsp_hit *hit)
 {
-    return query4(a, q, ray, from, hit);
+    return query_wide(a, q, ray, from, hit);
 }
 
-int bvh4_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from)
+int bvh_wide_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from)
 {
-    return query4(a, q, ray, from, NULL);
+    return query_wide(a, q, ray, from, NULL);
 }
