@@ -276,15 +276,21 @@ walk_wide(const bvh *t, unsigned w, const wide_ray *r, double tmin, query_state 
     return found;
 }
 
-/* The walk for T's width on the path R allows. */
-static inline int walk_ray(const bvh *t, const wide_ray *r, int use_float, double tmin,
-                           query_state *c, int any, uint64_t *tested)
+/* The walks of width 4 and 8 on the path R allows, a function each (each
+ * compiled as if alone; one function of both measured the same). */
+static __attribute__((noinline)) int walk_ray4(const bvh *t, const wide_ray *r, int use_float,
+                                               double tmin, query_state *c, int any,
+                                               uint64_t *tested)
 {
-    if (t->width == 8)
-        return use_float ? walk_wide(t, 8, r, tmin, c, any, 1, tested)
-                         : walk_wide(t, 8, r, tmin, c, any, 0, tested);
     return use_float ? walk_wide(t, 4, r, tmin, c, any, 1, tested)
                      : walk_wide(t, 4, r, tmin, c, any, 0, tested);
+}
+static __attribute__((noinline)) int walk_ray8(const bvh *t, const wide_ray *r, int use_float,
+                                               double tmin, query_state *c, int any,
+                                               uint64_t *tested)
+{
+    return use_float ? walk_wide(t, 8, r, tmin, c, any, 1, tested)
+                     : walk_wide(t, 8, r, tmin, c, any, 0, tested);
 }
 
 /* Closest hit into HIT, or occlusion when HIT is NULL. */
@@ -305,7 +311,8 @@ static inline __attribute__((always_inline)) int query_wide(const bsp_accel *a, 
     query_state c;
     query_start(&c, a->scene, t, ray, from);
     uint64_t tested = 1;
-    int found = walk_ray(t, &r, fl, ray->tmin, &c, !hit, &tested);
+    int found = t->width == 8 ? walk_ray8(t, &r, fl, ray->tmin, &c, !hit, &tested)
+                              : walk_ray4(t, &r, fl, ray->tmin, &c, !hit, &tested);
     int closest = query_finish(q, &c, tested, hit);
     return hit ? closest : found;
 }
