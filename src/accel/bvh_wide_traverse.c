@@ -6,7 +6,8 @@
  * farthest first. A popped node is skipped when its entry lies beyond the
  * best hit found since: the entry computed is at most the t of any hit
  * below it, so the skip loses no hit, ties included. Each width has a walk
- * of its own (walk_wide with W constant), so the lanes' loops unroll.
+ * of its own (walk_wide with W a constant: the lanes' loops have fixed
+ * bounds, and the compiler sizes each walk's arrays and offsets).
  *
  * Float tests (SSE, four lanes) serve the rays whose origin lies within
  * t->float_origin on every axis (bvh.h: there a computed slab t is the
@@ -54,7 +55,7 @@ static inline double pow2(int e)
 
 typedef struct wide_ray {
     double o[3], inv[3]; /* the double tests' (t units) */
-    unsigned near[3], far[3]; /* per axis, byte offsets in a wide node of the near and far faces */
+    unsigned near[3], far[3]; /* per axis, byte offsets in a wide node of the near, far faces */
     double scale;        /* the float tests' t' = t scale, scale = 2^shift (1: double tests) */
 #if defined(__SSE2__)
     __m128 of[3], invf[3]; /* the float tests' origin and scaled 1 / d */
