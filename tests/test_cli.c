@@ -292,6 +292,29 @@ TEST(cli_stats_of_a_tree)
     free(out);
 }
 
+/* --build-threads reaches the BVHs' threaded build: `stats` of the eight-wide
+ * BVH of a scene large enough for tasks (16,384 triangles) on one thread and
+ * on three prints the same digest and passes the checker both times. */
+TEST(cli_stats_bvh_same_tree_on_any_thread_count)
+{
+    char digest[2][64] = {"", ""};
+    for (int i = 0; i < 2; i++) {
+        char cmd[1024];
+        snprintf(cmd, sizeof cmd, "%s stats spd:tetra:7 --accel bvh8 --check --build-threads %d",
+                 harness_cli(), i ? 3 : 1);
+        int st;
+        char *out = harness_run(cmd, &st);
+        REQUIRE(out);
+        CHECK_EQ_INT(st, 0);
+        CHECK_STR_CONTAINS(out, "invariants     ok");
+        const char *d = strstr(out, "digest");
+        REQUIRE(d);
+        CHECK(sscanf(d, "digest %63s", digest[i]) == 1 && strlen(digest[i]) == 16);
+        free(out);
+    }
+    CHECK_MSG(strcmp(digest[0], digest[1]) == 0, "digests %s and %s", digest[0], digest[1]);
+}
+
 /* The member KEY of the JSON text J (its first occurrence, as the writers
  * print them: "KEY": VALUE) as text, or NULL. */
 static const char *json_member(const char *j, const char *key)
