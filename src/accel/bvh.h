@@ -139,7 +139,7 @@ static inline uint32_t bvh_wide_index(const unsigned char *n, unsigned w, unsign
 }
 static inline uint32_t bvh_wide_meta(const unsigned char *n, unsigned w, unsigned c)
 {
-    return bvh_wide_index(n, w, w + c);
+    return bvh_wide_index(n, w, w + c); /* the metas follow the W indices */
 }
 /* Lane C of wide node N (width W) as a node, and set from X. */
 static inline bvh_node bvh_wide_get(const unsigned char *n, unsigned w, unsigned c)

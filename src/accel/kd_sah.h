@@ -301,9 +301,6 @@ HIDDEN void kd_sah_start_workers(sah_build *b, int threads, size_t n);
  * then splices the subtrees into b->t in task order and frees the tasks. */
 HIDDEN bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st);
 
-/* The build threads options O ask for (0: every online core). */
-HIDDEN int kd_build_threads(const bsp_build_options *o);
-
 /* Frees B's scratch (not the shared per-primitive arrays). */
 HIDDEN void kd_sah_scratch_free(sah_build *b);
 /* B holds no scratch (its pointers NULL, its sizes 0), whatever it held:

@@ -31,7 +31,6 @@
 
 #include "accel/kd_prune.h"
 #include "accel/kd_sah.h"
-#include "util/task_pool.h"
 
 struct sah_task {
     uint32_t node; /* its placeholder leaf in the main tree */
@@ -46,11 +45,6 @@ struct sah_task {
     bsp_status st;
     bsp_error err;
 };
-
-int kd_build_threads(const bsp_build_options *o)
-{
-    return task_pool_threads(o ? o->threads : 0);
-}
 
 struct sah_pool {
     pthread_mutex_t lock;

@@ -13,6 +13,7 @@
 #include "accel/kd_prune.h"
 #include "accel/kd_sah.h"
 #include "util/radix_sort.h"
+#include "util/task_pool.h"
 
 #define ROOT_LISTS_PARALLEL_MIN (1u << 17) /* events per axis: a thread for fewer costs more */
 
@@ -122,7 +123,7 @@ static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n,
     }
     /* the root's events, made in primitive order, then sorted once */
     const size_t m = 2 * n;
-    const int threads = kd_build_threads(o);
+    const int threads = task_pool_threads(o->threads);
     root_lists(b, m, threads);
     node_lists root = {0, m, n, tsum};
     /* subtrees of n/64 (at least 512) primitives and down to an eighth of that
