@@ -403,3 +403,48 @@ TEST(cli_render_saved_rays_replay_to_the_render_counts)
     CHECK_STR_CONTAINS(out, "/nonexistent/dir/r-primary.txt: cannot open for writing");
     free(out);
 }
+
+/* bsp_query_counters_add sums field by field: hand-made counters, then the
+ * counters of rays split over two queries against one query's for them all. */
+TEST(batch_counters_add_sums_every_field)
+{
+    bsp_query_counters sum = {1, 2, 3, 4, 5, 6};
+    const bsp_query_counters c = {10, 200, 3000, 40000, 500000, 6000000};
+    bsp_query_counters_add(&sum, &c);
+    CHECK_EQ_INT(sum.rays, 11);
+    CHECK_EQ_INT(sum.isect_tests, 202);
+    CHECK_EQ_INT(sum.traversal_steps, 3003);
+    CHECK_EQ_INT(sum.leaves_visited, 40004);
+    CHECK_EQ_INT(sum.empty_leaves, 500005);
+    CHECK_EQ_INT(sum.mailbox_hits, 6000006);
+
+    bsp_scene *s = kd_test_load("spd:tetra:3");
+    enum { N = 2000 };
+    bsp_ray *rays = malloc(N * sizeof *rays);
+    uint32_t *from = malloc(N * sizeof *from);
+    REQUIRE(rays && from);
+    rng_state = 0xADDC0DEULL;
+    kd_test_rays(&rng_state, bsp_scene_bounds(s), N, bsp_scene_prim_count(s), rays, from);
+    bsp_accel *a = kd_test_build(s, BSP_ACCEL_SAH);
+    bsp_query *all = bsp_query_create(a), *half[2] = {bsp_query_create(a), bsp_query_create(a)};
+    REQUIRE(all && half[0] && half[1]);
+    bsp_hit h;
+    for (size_t i = 0; i < N; i++) {
+        (void)bsp_intersect_from(a, all, &rays[i], from[i], &h);
+        (void)bsp_intersect_from(a, half[i & 1], &rays[i], from[i], &h);
+    }
+    bsp_query_counters parts = {0};
+    bsp_query_counters_add(&parts, bsp_query_get_counters(half[0]));
+    bsp_query_counters_add(&parts, bsp_query_get_counters(half[1]));
+    const bsp_query_counters *want = bsp_query_get_counters(all);
+    CHECK_EQ_INT(want->rays, N);
+    CHECK(want->traversal_steps > 0 && want->isect_tests > 0);
+    CHECK(same_counters(&parts, want));
+    bsp_query_destroy(all);
+    bsp_query_destroy(half[0]);
+    bsp_query_destroy(half[1]);
+    bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+    free(rays);
+    free(from);
+}

@@ -1417,3 +1417,59 @@ TEST(mesh_ply_ascii_float_range_is_what_rounds_to_a_float)
         bsp_scene_destroy(s);
     }
 }
+
+/* bsp_scene_camera_is_default says where the camera came from: 1 for the
+ * view a mesh is framed with (and after bsp_scene_set_default_view), 0 for
+ * an NFF file's own camera, for a camera set by bsp_scene_set_camera, and
+ * for a scene without one. */
+TEST(mesh_camera_is_default_follows_the_cameras_origin)
+{
+    bsp_error err;
+    memset(&err, 0, sizeof err);
+    bsp_scene *s = bsp_scene_create();
+    REQUIRE(s);
+    CHECK(bsp_scene_camera(s) == NULL);
+    CHECK_EQ_INT(bsp_scene_camera_is_default(s), 0);
+    bsp_scene_destroy(s);
+
+    s = load_ok(OBJ_DIR "/polygons.obj");
+    REQUIRE(bsp_scene_camera(s));
+    CHECK_EQ_INT(bsp_scene_camera_is_default(s), 1);
+    bsp_camera cam = *bsp_scene_camera(s);
+    cam.angle_deg = 20;
+    CHECK_EQ_INT(bsp_scene_set_camera(s, &cam, &err), BSP_OK);
+    CHECK_EQ_INT(bsp_scene_camera_is_default(s), 0);
+    CHECK_EQ_INT(bsp_scene_set_default_view(s, NULL, NULL, NULL, 0, &err), BSP_OK);
+    CHECK_EQ_INT(bsp_scene_camera_is_default(s), 1);
+    bsp_scene_destroy(s);
+
+    s = load_ok("tests/data/nff_good/order.nff");
+    REQUIRE(bsp_scene_camera(s));
+    CHECK_EQ_INT(bsp_scene_camera_is_default(s), 0);
+    bsp_scene_destroy(s);
+}
+
+/* The background: black in a new scene, what bsp_scene_set_background set,
+ * and an NFF file's 'b' line. */
+TEST(mesh_background_round_trip)
+{
+    bsp_scene *s = bsp_scene_create();
+    REQUIRE(s);
+    double bg[3] = {-1, -1, -1};
+    bsp_scene_background(s, bg);
+    CHECK(bg[0] == 0 && bg[1] == 0 && bg[2] == 0);
+    const double set[3] = {0.25, 0.5, 0.078};
+    bsp_scene_set_background(s, set);
+    bsp_scene_background(s, bg);
+    CHECK(bg[0] == 0.25 && bg[1] == 0.5 && bg[2] == 0.078);
+    bsp_scene_destroy(s);
+
+    s = NULL;
+    bsp_error err;
+    memset(&err, 0, sizeof err);
+    const char *text = "b 0.078 0.361 0.753\np 3\n0 0 0\n1 0 0\n0 1 0\n";
+    REQUIRE(bsp_scene_load_nff_memory(text, strlen(text), "bg.nff", &s, &err) == BSP_OK);
+    bsp_scene_background(s, bg);
+    CHECK(bg[0] == 0.078 && bg[1] == 0.361 && bg[2] == 0.753);
+    bsp_scene_destroy(s);
+}

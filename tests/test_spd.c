@@ -10,6 +10,7 @@
  * bsp_scene_check against bsp_scene_load.
  */
 #include <ctype.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -1369,4 +1370,73 @@ TEST(scene_check_agrees_with_scene_load)
     CHECK(bsp_scene_load("tests/data/nff_bad/binary_garbage.nff", &s, &e) != BSP_OK);
     bsp_scene_destroy(s);
     CHECK(bsp_scene_check(NULL, &e) != BSP_OK && e.message[0]);
+}
+
+/* --- the list of names ---------------------------------------------------------------- */
+
+/* The thirteen SPD databases of ../shared/scenes/spd/MANIFEST.md, in the
+ * registry's order (balls first: the default scene). */
+static const char *const spd_manifest_names[] = {"balls",   "tetra",  "tree",  "rings",   "gears",
+                                                 "mount",   "lattice", "teapot", "shells",
+                                                 "jacks",   "sombrero", "sample", "nurbtst"};
+
+typedef struct names_call {
+    const char *got;
+} names_call;
+
+static void *call_scene_names(void *arg)
+{
+    ((names_call *)arg)->got = bsp_spd_scene_names();
+    return NULL;
+}
+
+/* bsp_spd_scene_names lists exactly the scenes spd:NAME builds, space-
+ * separated in the registry's order; each listed name has size bounds and
+ * builds at its smallest size. Its first calls are made by four threads at
+ * once (this test runs alone in `make tsan-test`, so under ThreadSanitizer
+ * those are the process's first calls), and all get the same string. */
+TEST(spd_names_list_every_scene)
+{
+    names_call calls[4];
+    pthread_t tid[4];
+    int started[4];
+    for (int i = 0; i < 4; i++)
+        started[i] = pthread_create(&tid[i], NULL, call_scene_names, &calls[i]) == 0;
+    for (int i = 0; i < 4; i++)
+        if (started[i])
+            pthread_join(tid[i], NULL);
+        else
+            call_scene_names(&calls[i]);
+    const char *names = bsp_spd_scene_names();
+    REQUIRE(names);
+    for (int i = 0; i < 4; i++)
+        CHECK(calls[i].got == names);
+
+    char want[256] = "";
+    size_t count = sizeof spd_manifest_names / sizeof spd_manifest_names[0];
+    for (size_t i = 0; i < count; i++) {
+        if (i)
+            strcat(want, " ");
+        strcat(want, spd_manifest_names[i]);
+    }
+    CHECK_MSG(strcmp(names, want) == 0, "names '%s', want '%s'", names, want);
+
+    /* every listed name is a scene (tokenised from the string itself) */
+    char copy[256];
+    snprintf(copy, sizeof copy, "%s", names);
+    size_t listed = 0;
+    for (char *save = NULL, *tok = strtok_r(copy, " ", &save); tok;
+         tok = strtok_r(NULL, " ", &save)) {
+        listed++;
+        int def = 0, lo = 0, hi = 0;
+        CHECK_MSG(bsp_spd_scene_sizes(tok, &def, &lo, &hi), "%s has no sizes", tok);
+        CHECK_MSG(lo >= 1 && lo <= def && def <= hi, "%s: sizes %d <= %d <= %d", tok, lo, def,
+                  hi);
+        char spec[64];
+        snprintf(spec, sizeof spec, "spd:%s:%d", tok, lo);
+        bsp_scene *s = build(spec);
+        CHECK_MSG(s && bsp_scene_prim_count(s) > 0, "%s builds no scene", spec);
+        bsp_scene_destroy(s);
+    }
+    CHECK_EQ_INT(listed, count);
 }

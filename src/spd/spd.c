@@ -4,6 +4,7 @@
  * way the SPD programs do) and the entry points declared in spd.h.
  */
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -62,20 +63,27 @@ static const spd_entry *find_entry(const char *name, size_t len)
     return NULL;
 }
 
+/* The names joined by spaces, made once: pthread_once, since the first
+ * calls may come from several threads at once (each loading a scene). */
+static char scene_names[256];
+static pthread_once_t scene_names_once = PTHREAD_ONCE_INIT;
+
+static void make_scene_names(void)
+{
+    size_t used = 0;
+    for (size_t i = 0; i < REGISTRY_COUNT; i++) {
+        int n = snprintf(scene_names + used, sizeof scene_names - used, "%s%s", i ? " " : "",
+                         registry[i].name);
+        if (n < 0 || (size_t)n >= sizeof scene_names - used)
+            break;
+        used += (size_t)n;
+    }
+}
+
 const char *bsp_spd_scene_names(void)
 {
-    static char names[256];
-    if (!names[0]) {
-        size_t used = 0;
-        for (size_t i = 0; i < REGISTRY_COUNT; i++) {
-            int n = snprintf(names + used, sizeof names - used, "%s%s", i ? " " : "",
-                             registry[i].name);
-            if (n < 0 || (size_t)n >= sizeof names - used)
-                break;
-            used += (size_t)n;
-        }
-    }
-    return names;
+    pthread_once(&scene_names_once, make_scene_names);
+    return scene_names;
 }
 
 int bsp_spd_scene_sizes(const char *name, int *def, int *min, int *max)
