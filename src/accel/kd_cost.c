@@ -198,7 +198,9 @@ static size_t cal_pass(const cal_set *cs, const bsp_ray *rays)
     return hits;
 }
 
-static volatile size_t cal_sink;
+/* where the timed loops' results go, so that they are not optimised away; one
+ * per thread, since calibrations may run on several threads at once */
+static _Thread_local volatile size_t cal_sink;
 
 /* Seconds of CPU time of this thread: unlike wall time, not inflated while
  * other processes run. */
