@@ -289,6 +289,21 @@ TEST(cli_trace_threads_exact_and_stats)
     snprintf(where, sizeof where, "%s:4: malformed or non-finite number", bad_path);
     CHECK_STR_CONTAINS(out, where);
     free(out);
+    /* a NUL byte ends a C string early: the line is refused, not read up to
+     * the NUL (the garbage after it would pass unread) */
+    f = fopen(bad_path, "w");
+    REQUIRE(f);
+    static const char nul_line[] = "0 0 20 0 0 -1\n0 0 20 0 0 -1\0 garbage\n";
+    fwrite(nul_line, 1, sizeof nul_line - 1, f);
+    fclose(f);
+    snprintf(cmd, sizeof cmd, "%s trace spd:rings --rays %s 2>&1 >/dev/null", harness_cli(),
+             bad_path);
+    out = harness_run(cmd, &status);
+    REQUIRE(out);
+    CHECK_EQ_INT(status, 1);
+    snprintf(where, sizeof where, "%s:2: a NUL byte in the line", bad_path);
+    CHECK_STR_CONTAINS(out, where);
+    free(out);
     /* a directory as the ray file: refused by name before any work */
     snprintf(cmd, sizeof cmd, "%s trace spd:rings --rays %s 2>&1", harness_cli(), harness_tmpdir());
     out = harness_run(cmd, &status);

@@ -352,14 +352,19 @@ int cmd_trace(int argc, char **argv)
     }
     char *line = NULL;
     size_t cap = 0, lineno = 0;
-    while (rc == 0 && getline(&line, &cap, in) >= 0) {
+    ssize_t got;
+    while (rc == 0 && (got = getline(&line, &cap, in)) >= 0) {
         lineno++;
         char *p = line;
         while (*p == ' ' || *p == '\t')
             p++;
-        if (!*p || *p == '\n' || *p == '\r' || *p == '#')
+        /* a NUL byte would end the line early, and what follows it would
+         * pass unread: refused, as the scene readers refuse it */
+        const char *bad = memchr(line, 0, (size_t)got) ? "a NUL byte in the line" : NULL;
+        if (!bad && (!*p || *p == '\n' || *p == '\r' || *p == '#'))
             continue;
-        const char *bad = parse_ray_line(p, nprims, &b.rays[b.n], &b.from[b.n]);
+        if (!bad)
+            bad = parse_ray_line(p, nprims, &b.rays[b.n], &b.from[b.n]);
         if (bad) {
             if (shoot_and_print(&run, &b)) /* the rays before it are answered */
                 fprintf(stderr, "%s: %s:%zu: %s\n", prog, rays_path, lineno, bad);
