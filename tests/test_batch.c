@@ -176,6 +176,21 @@ static char *read_file(const char *path)
     return (char *)harness_read_file(path, &len);
 }
 
+/* `bspray trace spd:rings --rays RAYS` (on two threads) exits with status 1
+ * and says WANT on stderr. */
+static void expect_trace_refused(const char *rays, const char *want)
+{
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "%s trace spd:rings --rays %s --threads 2 2>&1 >/dev/null",
+             harness_cli(), rays);
+    int status;
+    char *out = harness_run(cmd, &status);
+    REQUIRE(out);
+    CHECK_EQ_INT(status, 1);
+    CHECK_STR_CONTAINS(out, want);
+    free(out);
+}
+
 TEST(cli_trace_threads_exact_and_stats)
 {
     bsp_scene *s = kd_test_load("spd:rings");
@@ -280,15 +295,9 @@ TEST(cli_trace_threads_exact_and_stats)
     CHECK_MSG(len > 0 && strlen(out) == 2 * len && !memcmp(out, out + len, len),
               "two equal answers before the bad line: '%s'", out);
     free(out);
-    snprintf(cmd, sizeof cmd, "%s trace spd:rings --rays %s --threads 2 2>&1 >/dev/null",
-             harness_cli(), bad_path);
-    out = harness_run(cmd, &status);
-    REQUIRE(out);
-    CHECK_EQ_INT(status, 1);
     char where[700];
     snprintf(where, sizeof where, "%s:4: malformed or non-finite number", bad_path);
-    CHECK_STR_CONTAINS(out, where);
-    free(out);
+    expect_trace_refused(bad_path, where);
     /* a NUL byte ends a C string early: the line is refused, not read up to
      * the NUL (the garbage after it would pass unread) */
     f = fopen(bad_path, "w");
@@ -296,22 +305,11 @@ TEST(cli_trace_threads_exact_and_stats)
     static const char nul_line[] = "0 0 20 0 0 -1\n0 0 20 0 0 -1\0 garbage\n";
     fwrite(nul_line, 1, sizeof nul_line - 1, f);
     fclose(f);
-    snprintf(cmd, sizeof cmd, "%s trace spd:rings --rays %s 2>&1 >/dev/null", harness_cli(),
-             bad_path);
-    out = harness_run(cmd, &status);
-    REQUIRE(out);
-    CHECK_EQ_INT(status, 1);
     snprintf(where, sizeof where, "%s:2: a NUL byte in the line", bad_path);
-    CHECK_STR_CONTAINS(out, where);
-    free(out);
+    expect_trace_refused(bad_path, where);
     /* a directory as the ray file: refused by name before any work */
-    snprintf(cmd, sizeof cmd, "%s trace spd:rings --rays %s 2>&1", harness_cli(), harness_tmpdir());
-    out = harness_run(cmd, &status);
-    REQUIRE(out);
-    CHECK_EQ_INT(status, 1);
     snprintf(where, sizeof where, "%s: cannot read: Is a directory", harness_tmpdir());
-    CHECK_STR_CONTAINS(out, where);
-    free(out);
+    expect_trace_refused(harness_tmpdir(), where);
     snprintf(cmd, sizeof cmd, "%s trace spd:rings --rays %s --stats 2>&1 >/dev/null", harness_cli(),
              rays_path);
     out = harness_run(cmd, &status);
