@@ -193,8 +193,8 @@ typedef struct bsp_build_options {
     double mixed_primary_share; /* sah-mixed: primary rays / all rays of the render, in
                                    (0, 1]; 0: measured by a 65 x 65 pre-pass of the Whitted
                                    renderer (depth 4) from the view */
-    int threads;             /* sah family, bvh, bvh4: build threads; 0: every online
-                                core. The tree is the same for any count */
+    int threads;             /* sah family, bvh, bvh4, bvh8: build threads; 0: every
+                                online core. The tree is the same for any count */
     bsp_mixed_model mixed_model; /* sah-mixed: the model of the non-primary rays (default
                                     BSP_MIXED_COUNTED) */
     int mixed_check; /* sah-mixed: 1 (default) also builds the plain sah tree of the same

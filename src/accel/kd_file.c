@@ -31,6 +31,7 @@
 
 #include "accel/kd_cost.h"
 #include "accel/kd_tree.h"
+#include "util/errno_text.h"
 
 #define KD_FILE_MAGIC "BSPRAYKD"
 #define KD_FILE_VERSION 1u
@@ -220,7 +221,7 @@ bsp_status bsp_accel_save(const bsp_accel *a, const char *path, bsp_error *err)
     const int in_place = lstat(path, &ps) == 0 && !S_ISREG(ps.st_mode);
     writer w = {fopen(in_place ? path : part, "wb"), crc32(0L, Z_NULL, 0), 0};
     if (!w.f) {
-        bsp_status st = error_set(err, BSP_ERR_IO, path, 0, "cannot write: %s", strerror(errno));
+        bsp_status st = error_set(err, BSP_ERR_IO, path, 0, "cannot write: %s", ERRNO_TEXT(errno));
         free(part);
         return st;
     }
@@ -261,7 +262,7 @@ bsp_status bsp_accel_save(const bsp_accel *a, const char *path, bsp_error *err)
     if (w.failed) {
         if (!in_place)
             remove(part);
-        st = error_set(err, BSP_ERR_IO, path, 0, "cannot write: %s", strerror(saved_errno));
+        st = error_set(err, BSP_ERR_IO, path, 0, "cannot write: %s", ERRNO_TEXT(saved_errno));
     }
     free(part);
     return st;
@@ -483,7 +484,7 @@ bsp_status bsp_accel_load(const bsp_scene *scene, const char *path, bsp_accel **
     double t0 = accel_now();
     FILE *f = fopen(path, "rb");
     if (!f)
-        return error_set(err, BSP_ERR_IO, path, 0, "cannot open: %s", strerror(errno));
+        return error_set(err, BSP_ERR_IO, path, 0, "cannot open: %s", ERRNO_TEXT(errno));
     struct stat fs;
     if (fstat(fileno(f), &fs) != 0 || !S_ISREG(fs.st_mode)) {
         fclose(f);

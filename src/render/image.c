@@ -15,6 +15,7 @@
 #include <png.h>
 
 #include "bspray/render.h"
+#include "util/errno_text.h"
 
 static bsp_status image_fail(bsp_error *err, bsp_status status, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
@@ -123,7 +124,7 @@ bsp_status bsp_image_write_png(const bsp_image *img, const char *path, bsp_error
         int e = errno;
         free(row);
         return image_fail(err, BSP_ERR_IO, "%s: cannot open for writing: %s", path,
-                          strerror(e));
+                          ERRNO_TEXT(e));
     }
     png_err_ctx ctx = {{0}};
     png_structp png =
@@ -159,10 +160,10 @@ bsp_status bsp_image_write_png(const bsp_image *img, const char *path, bsp_error
     if (fflush(fp) != 0 || ferror(fp)) {
         int e = errno;
         fclose(fp);
-        return image_fail(err, BSP_ERR_IO, "%s: write error: %s", path, strerror(e));
+        return image_fail(err, BSP_ERR_IO, "%s: write error: %s", path, ERRNO_TEXT(e));
     }
     if (fclose(fp) != 0)
-        return image_fail(err, BSP_ERR_IO, "%s: write error: %s", path, strerror(errno));
+        return image_fail(err, BSP_ERR_IO, "%s: write error: %s", path, ERRNO_TEXT(errno));
     return BSP_OK;
 }
 
@@ -184,7 +185,7 @@ bsp_status bsp_image_write_ppm(const bsp_image *img, const char *path, bsp_error
         int e = errno;
         free(row);
         return image_fail(err, BSP_ERR_IO, "%s: cannot open for writing: %s", path,
-                          strerror(e));
+                          ERRNO_TEXT(e));
     }
     int ok = fprintf(fp, "P6\n%d %d\n255\n", img->width, img->height) > 0;
     for (int y = 0; ok && y < img->height; y++) {
@@ -202,7 +203,7 @@ bsp_status bsp_image_write_ppm(const bsp_image *img, const char *path, bsp_error
         e = errno;
     }
     if (!ok)
-        return image_fail(err, BSP_ERR_IO, "%s: write error: %s", path, strerror(e));
+        return image_fail(err, BSP_ERR_IO, "%s: write error: %s", path, ERRNO_TEXT(e));
     return BSP_OK;
 }
 
@@ -247,7 +248,7 @@ bsp_status bsp_image_read_png(const char *path, bsp_image **out, bsp_error *err)
     if (!fp) {
         int e = errno;
         return image_fail(err, BSP_ERR_IO, "%s: cannot open for reading: %s", path,
-                          strerror(e));
+                          ERRNO_TEXT(e));
     }
     unsigned char sig[8];
     if (fread(sig, 1, sizeof sig, fp) != sizeof sig || png_sig_cmp(sig, 0, sizeof sig) != 0) {

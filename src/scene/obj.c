@@ -57,6 +57,7 @@
 #include "geom/vec.h"
 #include "scene/mesh.h"
 #include "scene/scene_internal.h"
+#include "util/errno_text.h"
 
 /* ===================== helpers shared with ply.c (mesh.h) ===================== */
 
@@ -250,13 +251,13 @@ bsp_status mesh_open_file(const char *path, FILE **fp_out, size_t *cap_out, bsp_
         return error_set(err, BSP_ERR_INVALID, NULL, 0, "no scene file given");
     FILE *fp = fopen(path, "rb");
     if (!fp)
-        return error_set(err, BSP_ERR_IO, path, 0, "cannot open: %s", strerror(errno));
+        return error_set(err, BSP_ERR_IO, path, 0, "cannot open: %s", ERRNO_TEXT(errno));
     size_t cap = (size_t)1 << 16;
     struct stat st;
     if (fstat(fileno(fp), &st) == 0) {
         if (S_ISDIR(st.st_mode)) {
             fclose(fp);
-            return error_set(err, BSP_ERR_IO, path, 0, "cannot open: %s", strerror(EISDIR));
+            return error_set(err, BSP_ERR_IO, path, 0, "cannot open: %s", ERRNO_TEXT(EISDIR));
         }
         if (S_ISREG(st.st_mode)) {
             if ((uintmax_t)st.st_size > MESH_MAX_INPUT) {
@@ -310,7 +311,7 @@ bsp_status mesh_read_file(const char *path, char **out, size_t *outlen, bsp_erro
                 int e = errno;
                 free(buf);
                 fclose(fp);
-                return error_set(err, BSP_ERR_IO, path, 0, "read error: %s", strerror(e));
+                return error_set(err, BSP_ERR_IO, path, 0, "read error: %s", ERRNO_TEXT(e));
             }
             if (feof(fp))
                 break;

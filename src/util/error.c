@@ -4,8 +4,10 @@
  */
 #include <stdarg.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "scene/scene_internal.h"
+#include "util/errno_text.h"
 
 const char *bsp_status_name(bsp_status status)
 {
@@ -58,4 +60,12 @@ void scene_fail_record(const bsp_scene *s, bsp_error *err, bsp_status status, co
     va_start(ap, fmt);
     error_vrecord(err, status, s ? s->src_name : NULL, s ? s->src_line : 0, fmt, ap);
     va_end(ap);
+}
+
+const char *error_errno_text(int e, char *buf, size_t n)
+{
+    /* the XSI strerror_r (0 on success): _GNU_SOURCE is not defined here */
+    if (strerror_r(e, buf, n) != 0)
+        snprintf(buf, n, "error %d", e);
+    return buf;
 }
