@@ -23,7 +23,8 @@
  * Which nodes become tasks depends only on the scene, and one thread defers
  * them too, so every thread count gives the same bytes. A task's subtree
  * partitions only its own range of the primitives' order, and every leaf
- * fills its own range of the records as it is made.
+ * fills its own range of the records as it is made. The bounds pre-pass
+ * before it runs on the same threads, in parts (prim_bounds_and_costs).
  */
 #include <math.h>
 #include <stdint.h>
@@ -426,6 +427,61 @@ static bsp_status bvh_oom(bsp_error *err)
     return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory while building the BVH");
 }
 
+/* The bounds pre-pass over primitives [begin, end) of a scene: each live
+ * one's padded bounds and T_i, at its index (a task_run_fn; each task
+ * writes its own range). */
+typedef struct prepass_part {
+    const bsp_scene *s;
+    double pad;
+    const bsp_sah_costs *costs;
+    bsp_box *bounds;
+    double *cost;
+    uint32_t begin, end;
+} prepass_part;
+
+static void run_prepass(void *ctx, void *task)
+{
+    (void)ctx;
+    const prepass_part *pp = task;
+    for (uint32_t p = pp->begin; p < pp->end; p++) {
+        if (pp->s->prims[p].shape == SHAPE_NONE)
+            continue;
+        pp->bounds[p] = box_grow(bsp_scene_prim_bounds(pp->s, p), pp->pad);
+        pp->cost[p] = kd_prim_cost(pp->s, p, pp->costs);
+    }
+}
+
+/* BOUNDS[p] and COST[p] for every live primitive p of S, on THREADS threads
+ * (in parts of PREPASS_PARTS, whichever thread runs a part, the same
+ * values); 0 when out of memory. */
+#define PREPASS_PARTS 32
+static int prim_bounds_and_costs(const bsp_scene *s, double pad, const bsp_sah_costs *costs,
+                                 bsp_box *bounds, double *cost, int threads)
+{
+    const uint32_t np = (uint32_t)s->nprims;
+    prepass_part parts[PREPASS_PARTS];
+    for (uint32_t i = 0; i < PREPASS_PARTS; i++)
+        parts[i] = (prepass_part){s, pad, costs, bounds, cost,
+                                  (uint32_t)((uint64_t)np * i / PREPASS_PARTS),
+                                  (uint32_t)((uint64_t)np * (i + 1) / PREPASS_PARTS)};
+    if (threads <= 1) {
+        for (uint32_t i = 0; i < PREPASS_PARTS; i++)
+            run_prepass(NULL, &parts[i]);
+        return 1;
+    }
+    task_pool *pool = task_pool_create(threads, PREPASS_PARTS, run_prepass, NULL);
+    if (!pool)
+        return 0;
+    uint32_t listed = 0;
+    while (listed < PREPASS_PARTS && task_pool_add(pool, &parts[listed]))
+        listed++;
+    task_pool_finish(pool);
+    /* a part the pool could not list: made here */
+    for (uint32_t i = listed; i < PREPASS_PARTS; i++)
+        run_prepass(NULL, &parts[i]);
+    return 1;
+}
+
 bsp_status bvh_build(bsp_accel *a, bsp_error *err)
 {
     const bsp_scene *s = a->scene;
@@ -495,14 +551,15 @@ bsp_status bvh_build(bsp_accel *a, bsp_error *err)
         st = bvh_oom(err);
         goto done;
     }
-    uint32_t live = 0;
-    for (uint32_t p = 0; p < (uint32_t)np; p++) {
-        if (s->prims[p].shape == SHAPE_NONE)
-            continue;
-        bounds[p] = box_grow(bsp_scene_prim_bounds(s, p), t->pad);
-        cost[p] = kd_prim_cost(s, p, &cm.c);
-        b.order[live++] = p;
+    if (!prim_bounds_and_costs(s, t->pad, &cm.c, bounds, cost,
+                               n >= 2 * BVH_TASK_FLOOR ? task_pool_threads(a->opts.threads) : 1)) {
+        st = bvh_oom(err);
+        goto done;
     }
+    uint32_t live = 0;
+    for (uint32_t p = 0; p < (uint32_t)np; p++)
+        if (s->prims[p].shape != SHAPE_NONE)
+            b.order[live++] = p;
     b.s = s;
     b.bounds = bounds;
     b.cost = cost;
