@@ -4,11 +4,11 @@
  * hand: what goes in comes back (bit for bit where the header promises it,
  * within a few ulps for a triangle's edges and a cone's apex), and every
  * accessor refuses the wrong kind, a dropped primitive and an index out of
- * range without writing its outputs.
+ * range without writing its outputs. Also: every destroy function takes NULL.
  */
 #include <math.h>
 
-#include "bspray/scene.h"
+#include "bspray/bspray.h"
 #include "harness.h"
 
 static int vec_eq(bsp_vec3 a, bsp_vec3 b)
@@ -238,5 +238,30 @@ TEST(scene_access_empty_scene)
     CHECK(bsp_scene_prim_cone(s, 0, NULL, NULL, NULL, NULL) == BSP_ERR_INVALID);
     CHECK(bsp_scene_prim_vertex(s, 0, 0, NULL) == BSP_ERR_INVALID);
     CHECK(bsp_scene_prim_vertex_normal(s, 0, 0, NULL) == BSP_ERR_INVALID);
+    bsp_scene_destroy(s);
+}
+
+/* Every destroy function takes NULL and does nothing (DESIGN: destroy(NULL)
+ * is a no-op), so error paths can free what they have without tests. */
+TEST(api_destroy_null_is_a_no_op)
+{
+    bsp_scene_destroy(NULL);
+    bsp_accel_destroy(NULL);
+    bsp_query_destroy(NULL);
+    bsp_image_destroy(NULL);
+    /* and the objects they free still work after such calls */
+    bsp_scene *s = bsp_scene_create();
+    REQUIRE(s);
+    bsp_error err;
+    REQUIRE(bsp_scene_add_sphere(s, bsp_v3(0, 0, 0), 1.0, &err) == BSP_OK);
+    bsp_accel *a = NULL;
+    REQUIRE(bsp_accel_build(s, NULL, &a, &err) == BSP_OK);
+    bsp_query *q = bsp_query_create(a);
+    REQUIRE(q);
+    bsp_ray r = {bsp_v3(0, 0, -5), bsp_v3(0, 0, 1), 0.0, INFINITY};
+    bsp_hit h;
+    CHECK(bsp_intersect(a, q, &r, &h) && h.prim == 0 && h.t == 4.0);
+    bsp_query_destroy(q);
+    bsp_accel_destroy(a);
     bsp_scene_destroy(s);
 }
