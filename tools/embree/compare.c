@@ -49,14 +49,15 @@ static const char *const default_scenes[] = {
 static const char usage[] =
     "usage: bspray-embree [SCENE...] [--res N] [--rounds R] [--threads N] [--csv FILE]\n"
     "                     [--by-outcome] [--twice] [--pixel-order rows|tiles]\n"
-    "                     [--accel METHOD]\n"
+    "                     [--accel METHOD] [--rays primary|shadow]\n"
     "\n"
     "Primary-ray throughput of bspray (SAH kd-tree, mailboxes: what `bspray bench`\n"
     "times) against Embree 3 (high-quality BVH, robust off, rtcIntersect1,\n"
     "incoherent context; spheres and cones as exact user geometry) on the same\n"
     "rays, in the same run: each round shoots every ray through both, in slices of\n"
     "4096 rays that alternate between the two; the best round of each counts.\n"
-    "Single thread, CPU time.\n"
+    "Single thread, CPU time. With --rays shadow, the shadow rays of the same render\n"
+    "instead: occlusion queries (bsp_occluded_from, rtcOccluded1).\n"
     "\n"
     "  SCENE...       files or spd:NAME[:SIZE]; default: the 13 SPD scenes of bench\n"
     "  --res N        N x N primary rays, SPD corner sampling (default 513)\n"
@@ -76,6 +77,14 @@ static const char usage[] =
     "                 (default, the order of every earlier session: row by row of\n"
     "                 the image) or tiles (the square tiles 'bspray render' traces,\n"
     "                 each row by row)\n"
+    "  --rays R       primary (default) or shadow: the shadow rays the renderer casts\n"
+    "                 from the primary rays' hits to the lights (SPD rule: only to\n"
+    "                 lights on a surface's front), each from its hit point at\n"
+    "                 tmin = the renderer's epsilon to the light less it. bspray\n"
+    "                 also leaves the ray's own primitive out, as the renderer does;\n"
+    "                 Embree cannot, and relies on tmin alone (the agreement column\n"
+    "                 counts where that differs). With --by-outcome the parts are\n"
+    "                 'occluded' and 'clear', by bspray's answer\n"
     "  --accel METHOD bspray's structure (default sah, with its default options):\n"
     "                 any method of 'bspray render --accel' but the named variants;\n"
     "                 e.g. bvh, to set bspray's BVH against Embree's on the same\n"
@@ -95,6 +104,7 @@ typedef struct options {
     int shots;      /* queries per ray in a timed pass: 1, or 2 with --twice */
     bsp_pixel_order order; /* --pixel-order: the order the rays are recorded and shot in */
     bsp_accel_kind kind;   /* --accel: bspray's structure */
+    int shadow;            /* --rays shadow: occlusion queries on the shadow rays */
 } options;
 
 /* --- small utilities ---------------------------------------------------------------- */
@@ -155,19 +165,48 @@ static int parse_int(const char *s, int lo, int hi, int *out)
  * own recorder; the render runs on one thread, so no locking). */
 typedef struct ray_list {
     bsp_ray *rays;
+    uint32_t *from; /* the primitive each ray leaves out (BSP_NO_PRIM: none) */
     size_t n, cap;
+    bsp_ray_class cls; /* the class recorded */
 } ray_list;
 
-static void record_primary(bsp_ray_class cls, const bsp_ray *ray, uint32_t from, void *ctx)
+/* Appends RAY, leaving FROM out, to LIST. */
+static void ray_list_push(ray_list *list, const bsp_ray *ray, uint32_t from)
 {
-    (void)from; /* BSP_NO_PRIM for a primary ray */
-    ray_list *list = ctx;
-    if (cls == BSP_RAY_PRIMARY)
-        PUSH(list->rays, list->n, list->cap, *ray);
+    if (list->n == list->cap) {
+        size_t cap = list->cap ? 2 * list->cap : 256;
+        bsp_ray *r = realloc(list->rays, cap * sizeof *r);
+        if (r)
+            list->rays = r;
+        uint32_t *f = realloc(list->from, cap * sizeof *f);
+        if (f)
+            list->from = f;
+        if (!r || !f) {
+            fprintf(stderr, "%s: out of memory\n", prog);
+            exit(1);
+        }
+        list->cap = cap;
+    }
+    list->rays[list->n] = *ray;
+    list->from[list->n++] = from;
 }
 
-/* The primary rays of a RES x RES render of ACCEL's scene (depth 0: primary
- * and shadow rays only, the fewest that still give every primary ray). */
+static void ray_list_free(ray_list *list)
+{
+    free(list->rays);
+    free(list->from);
+}
+
+static void record_class(bsp_ray_class cls, const bsp_ray *ray, uint32_t from, void *ctx)
+{
+    ray_list *list = ctx;
+    if (cls == list->cls)
+        ray_list_push(list, ray, from);
+}
+
+/* The rays of class OUT->cls (primary or shadow) of a RES x RES render of
+ * ACCEL's scene (depth 0: primary and shadow rays only, the fewest that
+ * still give every primary ray and its shadow rays). */
 static int record_rays(const bsp_accel *accel, int res, bsp_pixel_order order, ray_list *out)
 {
     bsp_render_options ro;
@@ -176,7 +215,7 @@ static int record_rays(const bsp_accel *accel, int res, bsp_pixel_order order, r
     ro.max_depth = 0;
     ro.threads = 1;
     ro.pixel_order = order; /* rows: screen order, as in every session before 43 */
-    ro.ray_log = record_primary;
+    ro.ray_log = record_class;
     ro.ray_log_ctx = out;
     bsp_image *img = NULL;
     bsp_error err;
@@ -761,17 +800,34 @@ static uint32_t embree_prim(const embree_scene *es, const struct RTCHit *h)
 
 /* --- shooting -------------------------------------------------------------------------------- */
 
-/* The Embree form of every ray, converted once (not timed). */
-static struct RTCRay *embree_rays(const ray_list *rl)
+/* Embree's tnear for shadow rays, relative to the scene's size: Embree
+ * cannot leave the ray's own primitive out, and its float test of a ray
+ * that starts on a surface errs by about 1e-7 of the coordinates, so the
+ * renderer's tmin (1e-9 of the scene) would let the surface block its own
+ * shadow rays. 1e-5 is a hundred times that error. */
+#define EMBREE_SHADOW_TNEAR_REL 1e-5
+
+/* The Embree form of every ray, converted once (not timed); shadow rays
+ * start at least TNEAR_MIN along. */
+static struct RTCRay *embree_rays(const ray_list *rl, double tnear_min)
 {
     struct RTCRay *out = xmalloc(rl->n * sizeof *out);
     for (size_t i = 0; i < rl->n; i++) {
         const bsp_ray *r = &rl->rays[i];
-        out[i] = (struct RTCRay){(float)r->org.x, (float)r->org.y, (float)r->org.z, (float)r->tmin,
+        double tnear = rl->cls == BSP_RAY_SHADOW ? fmax(r->tmin, tnear_min) : r->tmin;
+        out[i] = (struct RTCRay){(float)r->org.x, (float)r->org.y, (float)r->org.z, (float)tnear,
                                  (float)r->dir.x, (float)r->dir.y, (float)r->dir.z, 0.0f,
                                  (float)r->tmax,  0xffffffffu,     (unsigned)i,     0};
     }
     return out;
+}
+
+/* EMBREE_SHADOW_TNEAR_REL times the largest extent of ACCEL's scene. */
+static double shadow_tnear(const bsp_accel *accel)
+{
+    bsp_box b = bsp_scene_bounds(bsp_accel_scene(accel));
+    double ext = fmax(b.hi.x - b.lo.x, fmax(b.hi.y - b.lo.y, b.hi.z - b.lo.z));
+    return isfinite(ext) && ext > 0.0 ? EMBREE_SHADOW_TNEAR_REL * ext : 0.0;
 }
 
 /* One Embree closest-hit query; returns the hit record (geomID invalid: miss). */
@@ -785,18 +841,33 @@ static inline void embree_shoot(RTCScene sc, const struct RTCRay *ray, struct RT
     rtcIntersect1(sc, &ctx, rh);
 }
 
-/* CPU seconds of one Embree pass over every ray; *HITS counts the hits so
- * the work cannot be optimised away. */
+/* One Embree occlusion query: 1 when RAY is blocked. */
+static inline int embree_blocked(RTCScene sc, const struct RTCRay *ray)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRay r = *ray;
+    rtcOccluded1(sc, &ctx, &r);
+    return r.tfar < 0.0f; /* -inf once blocked */
+}
+
+/* CPU seconds of one Embree pass over every ray (closest hits, or with
+ * SHADOW occlusion); *HITS counts the hits (blocked rays) so the work cannot
+ * be optimised away. */
 static double embree_pass(RTCScene sc, const struct RTCRay *rays, size_t n, int shots,
-                          size_t *hits)
+                          int shadow, size_t *hits)
 {
     struct RTCRayHit rh;
     size_t h = 0;
     double t0 = cpu_seconds();
     for (size_t i = 0; i < n; i++) {
         for (int k = 0; k < shots; k++) {
-            embree_shoot(sc, &rays[i], &rh);
-            h += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+            if (shadow) {
+                h += (size_t)embree_blocked(sc, &rays[i]);
+            } else {
+                embree_shoot(sc, &rays[i], &rh);
+                h += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+            }
         }
     }
     double t = cpu_seconds() - t0;
@@ -804,15 +875,19 @@ static double embree_pass(RTCScene sc, const struct RTCRay *rays, size_t n, int 
     return t;
 }
 
-static double bspray_pass(const bsp_accel *accel, bsp_query *q, const bsp_ray *rays, size_t n,
-                          int shots, size_t *hits)
+/* The same through bspray: rays [I, I + N) of RL. */
+static double bspray_pass(const bsp_accel *accel, bsp_query *q, const ray_list *rl, size_t i0,
+                          size_t n, int shots, int shadow, size_t *hits)
 {
     bsp_hit hit;
     size_t h = 0;
+    const bsp_ray *rays = rl->rays + i0;
+    const uint32_t *from = rl->from + i0;
     double t0 = cpu_seconds();
     for (size_t i = 0; i < n; i++)
         for (int k = 0; k < shots; k++)
-            h += (size_t)bsp_intersect(accel, q, &rays[i], &hit);
+            h += shadow ? (size_t)bsp_occluded_from(accel, q, &rays[i], from[i])
+                        : (size_t)bsp_intersect(accel, q, &rays[i], &hit);
     double t = cpu_seconds() - t0;
     *hits = h;
     return t;
@@ -829,7 +904,10 @@ static agreement compare_rays(const embree_scene *es, const struct RTCRay *erays
                               const bsp_accel *accel, bsp_query *q, const ray_list *rl)
 {
     agreement a = {rl->n, 0, 0, 0, 0};
-    for (size_t i = 0; i < rl->n; i++) {
+    for (size_t i = 0; i < rl->n && rl->cls == BSP_RAY_SHADOW; i++)
+        a.hit_miss += embree_blocked(es->scene, &erays[i]) !=
+                      bsp_occluded_from(accel, q, &rl->rays[i], rl->from[i]);
+    for (size_t i = 0; i < rl->n && rl->cls != BSP_RAY_SHADOW; i++) {
         struct RTCRayHit rh;
         embree_shoot(es->scene, &erays[i], &rh);
         bsp_hit bh;
@@ -889,11 +967,11 @@ static void time_rounds(const options *o, const embree_scene *es, const struct R
         for (size_t i = 0, k = 0; i < rl->n; i += SLICE_RAYS, k++) {
             size_t n = rl->n - i < SLICE_RAYS ? rl->n - i : SLICE_RAYS, h1, h2;
             if ((k + (size_t)round) % 2 == 0) {
-                te += embree_pass(es->scene, erays + i, n, o->shots, &h1);
-                tb += bspray_pass(accel, q, rl->rays + i, n, o->shots, &h2);
+                te += embree_pass(es->scene, erays + i, n, o->shots, o->shadow, &h1);
+                tb += bspray_pass(accel, q, rl, i, n, o->shots, o->shadow, &h2);
             } else {
-                tb += bspray_pass(accel, q, rl->rays + i, n, o->shots, &h2);
-                te += embree_pass(es->scene, erays + i, n, o->shots, &h1);
+                tb += bspray_pass(accel, q, rl, i, n, o->shots, o->shadow, &h2);
+                te += embree_pass(es->scene, erays + i, n, o->shots, o->shadow, &h1);
             }
             he += h1;
             hb += h2;
@@ -936,27 +1014,33 @@ static int time_by_outcome(const options *o, const embree_scene *es, const bsp_a
                            bsp_query *q, const ray_list *rl, const result *all, result *r)
 {
     static const char *const names[3] = {"hits", "misses in box", "misses off box"};
-    ray_list part[3] = {{NULL, 0, 0}, {NULL, 0, 0}, {NULL, 0, 0}};
+    static const char *const shadow_names[3] = {"occluded", "clear", ""};
+    ray_list part[3] = {{.cls = rl->cls}, {.cls = rl->cls}, {.cls = rl->cls}};
     for (size_t i = 0; i < rl->n; i++) {
         bsp_hit h;
         bsp_query_reset_counters(q);
-        int hit = bsp_intersect(accel, q, &rl->rays[i], &h);
-        int k = hit ? 0 : bsp_query_get_counters(q)->leaves_visited ? 1 : 2;
-        PUSH(part[k].rays, part[k].n, part[k].cap, rl->rays[i]);
+        int k;
+        if (o->shadow)
+            k = bsp_occluded_from(accel, q, &rl->rays[i], rl->from[i]) ? 0 : 1;
+        else
+            k = bsp_intersect(accel, q, &rl->rays[i], &h)            ? 0
+                : bsp_query_get_counters(q)->leaves_visited ? 1
+                                                            : 2;
+        ray_list_push(&part[k], &rl->rays[i], rl->from[i]);
     }
     int n = 0;
     for (int k = 0; k < 3; k++) {
         if (part[k].n) {
-            struct RTCRay *erays = embree_rays(&part[k]);
+            struct RTCRay *erays = embree_rays(&part[k], shadow_tnear(accel));
             r[n] = *all;
-            r[n].part = names[k];
+            r[n].part = o->shadow ? shadow_names[k] : names[k];
             r[n].rays = part[k].n;
             r[n].agree = compare_rays(es, erays, accel, q, &part[k]);
             time_rounds(o, es, erays, accel, q, &part[k], &r[n]);
             free(erays);
             n++;
         }
-        free(part[k].rays);
+        ray_list_free(&part[k]);
     }
     return n;
 }
@@ -993,20 +1077,21 @@ static int run_scene(const options *o, RTCDevice dev, const char *name, result r
     r->ear_clipped = es.mesh.ear_clipped;
     r->forced_ears = es.mesh.forced_ears;
 
-    ray_list rl = {NULL, 0, 0};
+    ray_list rl = {.cls = o->shadow ? BSP_RAY_SHADOW : BSP_RAY_PRIMARY};
     bsp_query *q = bsp_query_create(accel);
     int status = 1;
     if (q && record_rays(accel, o->res, o->order, &rl)) {
         r->rays = rl.n;
-        struct RTCRay *erays = embree_rays(&rl);
-        fprintf(stderr, "%s: %s: %zu primary rays; checking agreement\n", prog, name, rl.n);
+        struct RTCRay *erays = embree_rays(&rl, shadow_tnear(accel));
+        fprintf(stderr, "%s: %s: %zu %s rays; checking agreement\n", prog, name, rl.n,
+                o->shadow ? "shadow" : "primary");
         r->agree = compare_rays(&es, erays, accel, q, &rl);
         time_rounds(o, &es, erays, accel, q, &rl, r);
         free(erays);
         *nrows = 1 + (o->by_outcome ? time_by_outcome(o, &es, accel, q, &rl, r, r + 1) : 0);
         status = 0;
     }
-    free(rl.rays);
+    ray_list_free(&rl);
     bsp_query_destroy(q);
     embree_free(&es);
     bsp_accel_destroy(accel);
@@ -1025,13 +1110,16 @@ static void print_header(RTCDevice dev, const options *o)
 {
     ssize_t v = rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_VERSION);
     printf("Embree %ld.%ld.%ld: scene flags none (robust off), build quality high, "
-           "rtcIntersect1 with an incoherent context; spheres and cones as user geometry "
+           "%s with an incoherent context; spheres and cones as user geometry "
            "(double-precision callbacks); builds on %d thread(s).\n",
-           (long)(v / 10000), (long)(v / 100 % 100), (long)(v % 100), o->threads);
-    printf("bspray: %s build (%s, mailboxes), bsp_intersect. %d x %d primary rays, "
+           (long)(v / 10000), (long)(v / 100 % 100), (long)(v % 100),
+           o->shadow ? "rtcOccluded1" : "rtcIntersect1", o->threads);
+    printf("bspray: %s build (%s, mailboxes), %s. %s of %d x %d primary rays, "
            "single thread, thread CPU time, best of %d interleaved rounds%s.\n\n",
            o->kind == BSP_ACCEL_SAH ? "default" : "--accel", bsp_accel_kind_name(o->kind),
-           o->res, o->res, o->rounds,
+           o->shadow ? "bsp_occluded_from" : "bsp_intersect",
+           o->shadow ? "The shadow rays of a depth-0 render" : "The rays", o->res, o->res,
+           o->rounds,
            o->shots == 2 ? "; every ray shot twice in a row (--twice), its time covering both"
                          : "");
     if (o->order == BSP_PIXELS_TILES)
@@ -1058,18 +1146,19 @@ static const char csv_header[] =
     "scene,prims,embree_triangles,embree_user_prims,ear_clipped_polygons,rays,"
     "embree_mrays_s,bspray_mrays_s,ratio_bspray_embree,agree_pct,disagree_hit_miss,"
     "disagree_t,same_t_other_prim,build_ms_embree,build_ms_bspray,res,rounds,threads,"
-    "ratio_median_round,rays_part,shots,pixel_order\n";
+    "ratio_median_round,rays_part,shots,pixel_order,ray_class\n";
 
 static void csv_row(FILE *f, const result *r, const options *o)
 {
     fprintf(f,
             "%s,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,"
-            "%.3f,%.3f,%d,%d,%d,%.4f,%s,%d,%s\n",
+            "%.3f,%.3f,%d,%d,%d,%.4f,%s,%d,%s,%s\n",
             r->scene, r->nprims, r->tris, r->users, r->ear_clipped, r->rays, r->rate_embree,
             r->rate_bspray, r->rate_embree > 0.0 ? r->rate_bspray / r->rate_embree : 0.0,
             agree_pct(&r->agree), r->agree.hit_miss, r->agree.t_differs, r->agree.other_prim,
             1e3 * r->build_embree, 1e3 * r->build_bspray, o->res, o->rounds, o->threads,
-            r->ratio_median, r->part, o->shots, o->order == BSP_PIXELS_TILES ? "tiles" : "rows");
+            r->ratio_median, r->part, o->shots, o->order == BSP_PIXELS_TILES ? "tiles" : "rows",
+            o->shadow ? "shadow" : "primary");
     fflush(f);
 }
 
@@ -1089,6 +1178,7 @@ static int parse_args(int argc, char **argv, options *o)
     o->csv_path = NULL;
     o->by_outcome = 0;
     o->order = BSP_PIXELS_ROWS;
+    o->shadow = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         int has_value = i + 1 < argc;
@@ -1114,6 +1204,13 @@ static int parse_args(int argc, char **argv, options *o)
             o->shots = 2;
         } else if (!strcmp(a, "--by-outcome")) {
             o->by_outcome = 1;
+        } else if (!strcmp(a, "--rays") && has_value) {
+            const char *v = argv[++i];
+            if (!strcmp(v, "primary") || !strcmp(v, "shadow"))
+                o->shadow = !strcmp(v, "shadow");
+            else
+                return fprintf(stderr, "%s: --rays wants primary or shadow, not '%s'\n", prog, v),
+                       1;
         } else if (!strcmp(a, "--pixel-order") && has_value) {
             const char *v = argv[++i];
             if (!strcmp(v, "rows"))
