@@ -18,16 +18,6 @@
 
 static unsigned long long rng_state;
 
-static void add(bsp_query_counters *s, const bsp_query_counters *c)
-{
-    s->rays += c->rays;
-    s->isect_tests += c->isect_tests;
-    s->traversal_steps += c->traversal_steps;
-    s->leaves_visited += c->leaves_visited;
-    s->empty_leaves += c->empty_leaves;
-    s->mailbox_hits += c->mailbox_hits;
-}
-
 static int same_counters(const bsp_query_counters *a, const bsp_query_counters *b)
 {
     return a->rays == b->rays && a->isect_tests == b->isect_tests &&
@@ -76,11 +66,11 @@ TEST(batch_matches_single_naive_queries_on_any_thread_count)
             bsp_hit h;
             for (size_t i = 0; i < N; i++)
                 (void)bsp_intersect_from(a, q, &rays[i], from[i], &h);
-            add(&want_hit, bsp_query_get_counters(q));
+            bsp_query_counters_add(&want_hit, bsp_query_get_counters(q));
             bsp_query_reset_counters(q);
             for (size_t i = 0; i < N; i++)
                 (void)bsp_occluded_from(a, q, &rays[i], from[i]);
-            add(&want_occ, bsp_query_get_counters(q));
+            bsp_query_counters_add(&want_occ, bsp_query_get_counters(q));
             bsp_query_destroy(q);
             CHECK_EQ_INT(want_hit.rays, N);
             /* the naive method on two threads only: its rays are slow */

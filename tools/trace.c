@@ -358,12 +358,14 @@ int cmd_trace(int argc, char **argv)
         char *p = line;
         while (*p == ' ' || *p == '\t')
             p++;
+        const char *bad;
         /* a NUL byte would end the line early, and what follows it would
          * pass unread: refused, as the scene readers refuse it */
-        const char *bad = memchr(line, 0, (size_t)got) ? "a NUL byte in the line" : NULL;
-        if (!bad && (!*p || *p == '\n' || *p == '\r' || *p == '#'))
+        if (memchr(line, 0, (size_t)got))
+            bad = "a NUL byte in the line";
+        else if (!*p || *p == '\n' || *p == '\r' || *p == '#')
             continue;
-        if (!bad)
+        else
             bad = parse_ray_line(p, nprims, &b.rays[b.n], &b.from[b.n]);
         if (bad) {
             if (shoot_and_print(&run, &b)) /* the rays before it are answered */
