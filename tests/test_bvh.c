@@ -13,6 +13,7 @@
 #include "accel/bvh.h"
 #include "bspray/bspray.h"
 #include "harness.h"
+#include "same_util.h"
 
 static bsp_accel *bvh_kind_of(const bsp_scene *s, bsp_accel_kind kind, int leaf_size,
                               int max_depth)
@@ -353,7 +354,7 @@ TEST(bvh_wide_float_and_double_paths_match_naive)
         int xa = bsp_intersect(a, qa, &r, &ha), xn = bsp_intersect(nv, qn, &r, &hn);
         rays++;
         hits += xn;
-        if (xa != xn || (xn && (ha.prim != hn.prim || ha.t != hn.t)) ||
+        if (!same_hit(xa, &ha, xn, &hn) ||
             bsp_occluded(a, qa, &r) != bsp_occluded(nv, qn, &r)) {
             bad++;
             CHECK_MSG(0, "ray %d (case %d, length %g): width %u %d prim %u t %.17g, naive %d prim %u t %.17g",
@@ -434,7 +435,7 @@ TEST(bvh_build_is_deterministic)
                 bsp_hit ha, hn;
                 int xa = bsp_intersect(acc[1], qa, &r, &ha), xn = bsp_intersect(nv, qn, &r, &hn);
                 hits += xn;
-                bad += xa != xn || (xn && (ha.prim != hn.prim || ha.t != hn.t)) ||
+                bad += !same_hit(xa, &ha, xn, &hn) ||
                        bsp_occluded(acc[1], qa, &r) != bsp_occluded(nv, qn, &r);
             }
             CHECK_MSG(bad == 0, "%s %s: %d of 3000 rays differ from naive", specs[i], name,

@@ -39,6 +39,7 @@
 #include "bspray/bspray.h"
 #include "geom/vec.h"
 #include "harness.h"
+#include "same_util.h"
 
 static int ray_count(int full);
 
@@ -531,13 +532,6 @@ TEST(sah_min_saving_decides_the_root_split_by_its_saving)
 }
 
 /* --- exactness against the naive method ---------------------------------------------------------- */
-
-static int same_hit(int f1, const bsp_hit *a, int f2, const bsp_hit *b)
-{
-    if (f1 != f2)
-        return 0;
-    return !f1 || (a->prim == b->prim && a->t == b->t);
-}
 
 static bsp_ray random_ray(bsp_box box)
 {

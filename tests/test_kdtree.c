@@ -24,6 +24,7 @@
 #include "bspray/bspray.h"
 #include "geom/vec.h"
 #include "harness.h"
+#include "same_util.h"
 
 static unsigned long long rng;
 static double rnd(void)
@@ -129,15 +130,6 @@ static bsp_ray make_ray(ray_gen *g)
         r.tmax = r.tmin + rnd_in(0, 1.0) * diag;
     }
     return r;
-}
-
-static int same_hit(int f1, const bsp_hit *a, int f2, const bsp_hit *b)
-{
-    if (f1 != f2)
-        return 0;
-    if (!f1)
-        return 1;
-    return a->prim == b->prim && memcmp(&a->t, &b->t, sizeof a->t) == 0;
 }
 
 /* Quick mode (the sanitizer run) builds the view rules (sah-per, sah-par,
@@ -621,7 +613,7 @@ TEST(kd_no_mailbox_skips_the_best_hits_primitive)
             bsp_accel_destroy(a);
         }
         CHECK_EQ_INT(h[0].prim, 0);
-        CHECK(h[0].prim == h[1].prim && h[0].t == h[1].t);
+        CHECK(h[0].prim == h[1].prim && same_double(h[0].t, h[1].t));
         CHECK_MSG(leaves[0] >= 2, "%s: %llu leaves", kind ? "sah" : "kaplan",
                   (unsigned long long)leaves[0]);
         /* with mailboxes each primitive once; without, so too: no tiny sphere

@@ -27,6 +27,7 @@
 #include "bspray/scene.h"
 #include "geom/vec.h"
 #include "harness.h"
+#include "same_util.h"
 #include "scene/mesh.h"
 
 #define OBJ_DIR "tests/data/obj"
@@ -67,16 +68,6 @@ static bsp_scene *load_mem_ok(mem_loader fn, const char *buf, size_t len, const 
               err.message);
     REQUIRE(st == BSP_OK && s != NULL);
     return s;
-}
-
-static int same_double(double a, double b)
-{
-    return memcmp(&a, &b, sizeof a) == 0;
-}
-
-static int same_vec(bsp_vec3 a, bsp_vec3 b)
-{
-    return same_double(a.x, b.x) && same_double(a.y, b.y) && same_double(a.z, b.z);
 }
 
 /* Checks the kind, vertex count and exact bounds of primitive I. */

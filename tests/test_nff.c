@@ -21,6 +21,7 @@
 
 #include "bspray/scene.h"
 #include "harness.h"
+#include "same_util.h"
 
 #define GOOD_DIR "tests/data/nff_good"
 #define BAD_DIR "tests/data/nff_bad"
@@ -49,16 +50,6 @@ static bsp_scene *load_mem_ok(const char *buf, size_t len, const char *name)
               err.message);
     REQUIRE(st == BSP_OK && s != NULL);
     return s;
-}
-
-static int same_double(double a, double b)
-{
-    return memcmp(&a, &b, sizeof a) == 0;
-}
-
-static int same_vec(bsp_vec3 a, bsp_vec3 b)
-{
-    return same_double(a.x, b.x) && same_double(a.y, b.y) && same_double(a.z, b.z);
 }
 
 /* Checks that A and B hold the same scene; warnings are compared word for

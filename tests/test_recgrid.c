@@ -21,6 +21,7 @@
 #include "harness.h"
 #include "havran_test_util.h"
 #include "kd_test_util.h"
+#include "same_util.h"
 
 /* The hand-made scene: a box of about [-4, 4]^3, made by a sphere of
  * radius 0.1 at (-3.9, -3.9, -3.9) and one of radius 1 at (3, 3, 3); and
@@ -170,7 +171,7 @@ static void shoot_x(const bsp_scene *s, const bsp_accel *a, double yz, bsp_hit *
     bsp_query *nq = bsp_query_create(naive);
     bsp_hit nh;
     int nf = bsp_intersect(naive, nq, &ray, &nh);
-    CHECK(nf == *found && (!nf || (nh.prim == hit->prim && nh.t == hit->t)));
+    CHECK(same_hit(nf, &nh, *found, hit));
     bsp_query_destroy(nq);
     bsp_accel_destroy(naive);
 }

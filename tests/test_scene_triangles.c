@@ -12,6 +12,7 @@
 
 #include "bspray/bspray.h"
 #include "harness.h"
+#include "same_util.h"
 
 /* A height field of (G+1)^2 shared vertices and 2 G^2 triangles over
  * [0, 1]^2, with coordinates that are not exactly representable, one
@@ -68,11 +69,6 @@ static bsp_scene *mesh_scene(int bulk, int with_normals)
         }
     }
     return s;
-}
-
-static int same_vec(bsp_vec3 a, bsp_vec3 b)
-{
-    return !memcmp(&a, &b, sizeof a);
 }
 
 static int same_box(bsp_box a, bsp_box b)
@@ -137,7 +133,7 @@ TEST(scene_add_triangles_makes_the_polygons_one_by_one)
             bsp_hit ha, hn;
             int ia = bsp_intersect(ka, qa, &ray, &ha), in = bsp_intersect(nb, qn, &ray, &hn);
             hits += in;
-            agree &= ia == in && (!in || (ha.prim == hn.prim && !memcmp(&ha.t, &hn.t, sizeof ha.t)));
+            agree &= same_hit(ia, &ha, in, &hn);
         }
         CHECK_MSG(agree, "with normals %d: a closest hit differs from the naive method's",
                   with_normals);
