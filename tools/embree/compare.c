@@ -899,15 +899,20 @@ typedef struct agreement {
     size_t rays, disagree, hit_miss, t_differs, other_prim;
 } agreement;
 
-/* Shoots every ray through both (untimed) and compares hit/miss and t. */
+/* Shoots every ray through both (untimed) and compares hit/miss and t
+ * (shadow rays: blocked or not). */
 static agreement compare_rays(const embree_scene *es, const struct RTCRay *erays,
                               const bsp_accel *accel, bsp_query *q, const ray_list *rl)
 {
     agreement a = {rl->n, 0, 0, 0, 0};
-    for (size_t i = 0; i < rl->n && rl->cls == BSP_RAY_SHADOW; i++)
-        a.hit_miss += embree_blocked(es->scene, &erays[i]) !=
-                      bsp_occluded_from(accel, q, &rl->rays[i], rl->from[i]);
-    for (size_t i = 0; i < rl->n && rl->cls != BSP_RAY_SHADOW; i++) {
+    if (rl->cls == BSP_RAY_SHADOW) {
+        for (size_t i = 0; i < rl->n; i++)
+            a.hit_miss += embree_blocked(es->scene, &erays[i]) !=
+                          bsp_occluded_from(accel, q, &rl->rays[i], rl->from[i]);
+        a.disagree = a.hit_miss;
+        return a;
+    }
+    for (size_t i = 0; i < rl->n; i++) {
         struct RTCRayHit rh;
         embree_shoot(es->scene, &erays[i], &rh);
         bsp_hit bh;
