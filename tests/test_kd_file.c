@@ -15,6 +15,7 @@
 #include "bspray/bspray.h"
 #include "harness.h"
 #include "kd_test_util.h"
+#include "same_util.h"
 
 /* the header's size and the offsets the tests edit (kd_file.c's layout) */
 #define HDR 248
@@ -90,9 +91,7 @@ static void check_same_answers(const bsp_scene *s, const bsp_accel *a, const bsp
         int rb = bsp_intersect_from(b, qb, &rays[i], from[i], &hb);
         int rn = bsp_intersect_from(n, qn, &rays[i], from[i], &hn);
         hits += (size_t)rn;
-        if (ra != rb || rb != rn || (rn && (ha.prim != hb.prim || hb.prim != hn.prim ||
-                                            memcmp(&hb.t, &hn.t, sizeof hb.t) != 0 ||
-                                            memcmp(&ha.t, &hb.t, sizeof ha.t) != 0))) {
+        if (!same_hit(ra, &ha, rn, &hn) || !same_hit(rb, &hb, rn, &hn)) {
             if (bad++ < 3)
                 CHECK_MSG(0, "%s: ray %zu: built %d/%u, loaded %d/%u, naive %d/%u", label, i,
                           ra, ra ? ha.prim : 0, rb, rb ? hb.prim : 0, rn, rn ? hn.prim : 0);

@@ -12,6 +12,7 @@
 #include "bspray/bspray.h"
 #include "harness.h"
 #include "kd_test_util.h"
+#include "same_util.h"
 
 enum { THREADS = 4, RAYS = 400 };
 
@@ -62,8 +63,7 @@ static size_t wrong_answers(const bsp_scene *s, bsp_accel_kind kind, int seed, i
             int ga = bsp_intersect_from(a, qa, &rays[i], from[i], &ha);
             int on = bsp_occluded_from(naive, qn, &rays[i], from[i]);
             int oa = bsp_occluded_from(a, qa, &rays[i], from[i]);
-            wrong += gn != ga || (gn && (hn.prim != ha.prim || memcmp(&hn.t, &ha.t, sizeof hn.t))) ||
-                     on != oa;
+            wrong += !same_hit(gn, &hn, ga, &ha) || on != oa;
         }
     }
     bsp_query_destroy(qn);
