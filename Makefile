@@ -147,9 +147,10 @@ test: $(CLI) $(TESTS) $(EXAMPLES) $(EXAMPLES_SHARED) $(BUILD)/tests/names_apart 
 	BSPRAY_CLI=./$(CLI) ./$(TESTS)
 
 # The sanitizer run checks the same things with fewer random rays and the
-# every-ray render checks at 65 x 65 instead of 513 x 513 (BSPRAY_TEST_QUICK).
+# every-ray render checks at 65 x 65 instead of 513 x 513 (BSPRAY_TEST_QUICK),
+# at -O2 (the checks are the same; it ran about a fifth faster than at -O1).
 asan-test:
-	BSPRAY_TEST_QUICK=1 $(MAKE) BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer" \
+	BSPRAY_TEST_QUICK=1 $(MAKE) BUILD=build-asan OPT="-O2 -g -fno-omit-frame-pointer" \
 	    SAN="-fsanitize=address,undefined -fno-sanitize-recover=all" test
 
 # The tests that run threads, under ThreadSanitizer (needs clang): ray

@@ -17,7 +17,7 @@ for a in "$@"; do
     *) seconds=$a ;;
     esac
 done
-make -s fuzz >/dev/null
+make -s -j"$(nproc 2>/dev/null || echo 2)" fuzz >/dev/null
 make -s build/bspray >/dev/null
 
 seeds=build-fuzz/seeds

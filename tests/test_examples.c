@@ -330,37 +330,6 @@ TEST(static_library_keeps_internal_names_to_itself)
     free(out);
 }
 
-/* tests/oom/oom_sweep.c, linked with the allocator wrapped: every
- * allocation of each scenario (the readers, every structure's build, a query,
- * a batch, a render, a tree file) made to fail in turn, alone and with every
- * later one. Each run must give the answer of the run without failures or
- * BSP_ERR_NOMEM with a message, and leave no block allocated. */
-TEST(every_allocation_failing_in_turn_gives_nomem_or_the_right_answer)
-{
-    char exe[1024], cmd[1200];
-    beside_cli("tests/oom_sweep", exe, sizeof exe);
-    snprintf(cmd, sizeof cmd, "%s tests/data 2>&1", exe);
-    int status;
-    char *out = harness_run(cmd, &status);
-    REQUIRE(out);
-    CHECK_MSG(status == 0, "'%s' exited with %d: %s", cmd, status, out);
-    CHECK_STR_CONTAINS(out, "oom_sweep: every run held");
-    /* the sweep did fail allocations: the SAH build of the teapot, the OBJ
-     * reader, a tree file and a scene made by the add_* calls were refused */
-    static const char *const names[] = {"build sah spd:teapot:2", "load polygons.obj",
-                                        "tree file spd:gears:1", "scene in code"};
-    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
-        const char *line = strstr(out, names[i]);
-        long allocs = 0, runs = 0, refused = 0;
-        CHECK_MSG(line && sscanf(line + strlen(names[i]), " %ld allocations, %ld runs, %ld refused",
-                                 &allocs, &runs, &refused) == 3,
-                  "no line for '%s' in: %s", names[i], out);
-        CHECK_MSG(allocs >= 5 && runs == 2 * allocs && refused > 0,
-                  "%s: %ld allocations, %ld runs, %ld refused", names[i], allocs, runs, refused);
-    }
-    free(out);
-}
-
 /* Whether this build runs under AddressSanitizer: its shared library then
  * cannot be loaded into a program built without it (Python). */
 #if defined(__SANITIZE_ADDRESS__)
@@ -373,6 +342,60 @@ TEST(every_allocation_failing_in_turn_gives_nomem_or_the_right_answer)
 #ifndef BUILT_WITH_ASAN
 #define BUILT_WITH_ASAN 0
 #endif
+
+/* Whether this build runs under ThreadSanitizer (make tsan-test). */
+#if defined(__SANITIZE_THREAD__)
+#define BUILT_WITH_TSAN 1
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define BUILT_WITH_TSAN 1
+#endif
+#endif
+#ifndef BUILT_WITH_TSAN
+#define BUILT_WITH_TSAN 0
+#endif
+
+/* tests/oom/oom_sweep.c, linked with the allocator wrapped: every
+ * allocation of each scenario (the readers, every structure's build, a query,
+ * a batch, a render, a tree file) made to fail in turn, alone and with every
+ * later one. Each run must give the answer of the run without failures or
+ * BSP_ERR_NOMEM with a message, and leave no block allocated. */
+TEST(every_allocation_failing_in_turn_gives_nomem_or_the_right_answer)
+{
+    char exe[1024], cmd[1200];
+    beside_cli("tests/oom_sweep", exe, sizeof exe);
+    /* under ThreadSanitizer (make tsan-test) only the scenarios that run
+     * threads: the single-threaded ones are the other runs' work */
+    snprintf(cmd, sizeof cmd, "%s tests/data%s 2>&1", exe, BUILT_WITH_TSAN ? " thread" : "");
+    int status;
+    char *out = harness_run(cmd, &status);
+    REQUIRE(out);
+    CHECK_MSG(status == 0, "'%s' exited with %d: %s", cmd, status, out);
+    CHECK_STR_CONTAINS(out, "oom_sweep: every run held");
+    /* the sweep did fail allocations: the SAH build of the teapot, the OBJ
+     * reader, a tree file and a scene made by the add_* calls were refused
+     * (under ThreadSanitizer: a build and a batch on two threads) */
+    static const char *const all_names[] = {"build sah spd:teapot:2", "load polygons.obj",
+                                            "tree file spd:gears:1", "scene in code"};
+    static const char *const thread_names[] = {"build sah+2threads spd:teapot:2",
+                                               "batch on 2 threads spd:gears:1",
+                                               "build bvh8+tasks+2threads spd:tetra:7"};
+    const char *const *names = BUILT_WITH_TSAN ? thread_names : all_names;
+    size_t nnames = BUILT_WITH_TSAN ? 3 : 4;
+    if (BUILT_WITH_TSAN)
+        CHECK(strstr(out, "load polygons.obj") == NULL);
+    for (size_t i = 0; i < nnames; i++) {
+        const char *line = strstr(out, names[i]);
+        long allocs = 0, runs = 0, refused = 0;
+        CHECK_MSG(line && sscanf(line + strlen(names[i]), " %ld allocations, %ld runs, %ld refused",
+                                 &allocs, &runs, &refused) == 3,
+                  "no line for '%s' in: %s", names[i], out);
+        CHECK_MSG(allocs >= 5 && runs == 2 * allocs && refused > 0,
+                  "%s: %ld allocations, %ld runs, %ld refused", names[i], allocs, runs, refused);
+    }
+    free(out);
+}
+
 
 TEST(example_shoot_py_through_ctypes_prints_what_shoot_prints)
 {

@@ -14,7 +14,8 @@
  * no block allocated once its objects are destroyed. No crash, no other
  * status, no leak, no silently wrong answer.
  *
- *   oom_sweep [DATA_DIR]   (default tests/data)
+ *   oom_sweep [DATA_DIR [NAME_PART]]   (default tests/data; with NAME_PART,
+ *                                       only the scenarios whose names hold it)
  *
  * Prints one line per scenario and exits 0 when every run held, 1 otherwise
  * (each failing run named on stderr). tests/test_examples.c runs it.
@@ -457,11 +458,16 @@ static int run_tree_file(const scenario *sc, char *why, size_t n)
 /* --- the sweep -------------------------------------------------------------- */
 
 static int failures;
+static const char *only; /* NAME_PART: sweep only scenarios whose names hold it */
+static int swept;        /* scenarios swept */
 
 /* Runs SC once without failures (its allocation count N), then with each
  * of its N allocations failing, in both modes. */
 static void sweep(const scenario *sc)
 {
+    if (only && !strstr(sc->name, only))
+        return;
+    swept++;
     char why[512] = "";
     long base = atomic_load(&live);
     arm(FAIL_NEVER, -1);
@@ -584,6 +590,7 @@ static const char *const scene_names[] = {"spd:balls:1", "spd:tree:3", "spd:teap
 int main(int argc, char **argv)
 {
     const char *data = argc > 1 ? argv[1] : "tests/data";
+    only = argc > 2 ? argv[2] : NULL;
     char gz[256], tree[256], png[256];
     snprintf(gz, sizeof gz, "/tmp/bspray-oom-%ld.nff.gz", (long)getpid());
     snprintf(tree, sizeof tree, "/tmp/bspray-oom-%ld.kdt", (long)getpid());
@@ -761,6 +768,10 @@ int main(int argc, char **argv)
     remove(gz);
     remove(tree);
     remove(png);
+    if (swept == 0) {
+        fprintf(stderr, "oom_sweep: no scenario's name holds '%s'\n", only ? only : "");
+        return 2;
+    }
     printf("%s\n", failures ? "oom_sweep: FAILED" : "oom_sweep: every run held");
     return failures ? 1 : 0;
 }
