@@ -195,6 +195,7 @@ int main(int argc, char **argv)
 {
     const char *filter = argc > 1 ? argv[1] : NULL;
     int passed = 0, failed = 0, skipped = 0;
+    double total_secs = 0.0; /* the tests' own times, summed */
     harness_tmpdir();
     atexit(remove_tmpdir);
     qsort(tests, (size_t)ntests, sizeof tests[0], cmp_tests);
@@ -206,6 +207,7 @@ int main(int argc, char **argv)
         int outcome = run_one(tests[i].fn);
         clock_gettime(CLOCK_MONOTONIC, &t1);
         double secs = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+        total_secs += secs;
         const char *verdict;
         if (outcome == 1) {
             failed++;
@@ -219,6 +221,7 @@ int main(int argc, char **argv)
         }
         fprintf(stderr, "%s %-48s %7.2fs  (%s)\n", verdict, tests[i].name, secs, tests[i].file);
     }
+    fprintf(stderr, "the tests took %.1fs in all\n", total_secs);
     fflush(stderr);
     if (skipped)
         printf("%d passed, %d failed, %d skipped\n", passed, failed, skipped);
