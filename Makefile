@@ -27,7 +27,10 @@ LDFLAGS ?=
 
 LIB_SRC  := $(sort $(wildcard src/*/*.c))
 TEST_SRC := $(sort $(wildcard tests/*.c))
-LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/obj/%.o)
+# PIC_ONLY=1 (the sanitizer suite) makes the static library of the
+# position-independent objects the shared one is made of, so that the
+# library is compiled once rather than twice
+LIB_OBJ  := $(if $(PIC_ONLY),$(LIB_SRC:%.c=$(BUILD)/pic/%.o),$(LIB_SRC:%.c=$(BUILD)/obj/%.o))
 TEST_OBJ := $(TEST_SRC:%.c=$(BUILD)/obj/%.o)
 CLI_OBJ  := $(patsubst %.c,$(BUILD)/obj/%.o,$(sort $(wildcard tools/*.c)))
 # tools/embree/ is outside that wildcard: only `make embree-compare` needs Embree
@@ -150,7 +153,7 @@ test: $(CLI) $(TESTS) $(EXAMPLES) $(EXAMPLES_SHARED) $(BUILD)/tests/names_apart 
 # every-ray render checks at 65 x 65 instead of 513 x 513 (BSPRAY_TEST_QUICK),
 # at -O2 (the checks are the same; it ran about a fifth faster than at -O1).
 asan-test:
-	BSPRAY_TEST_QUICK=1 $(MAKE) BUILD=build-asan OPT="-O2 -g -fno-omit-frame-pointer" \
+	BSPRAY_TEST_QUICK=1 $(MAKE) BUILD=build-asan PIC_ONLY=1 OPT="-O2 -g -fno-omit-frame-pointer" \
 	    SAN="-fsanitize=address,undefined -fno-sanitize-recover=all" test
 
 # The tests that run threads, under ThreadSanitizer (needs clang): ray
