@@ -381,7 +381,8 @@ TEST(every_allocation_failing_in_turn_gives_nomem_or_the_right_answer)
                                                "batch on 2 threads spd:gears:1",
                                                "build bvh8+tasks+2threads spd:tetra:7"};
     const char *const *names = BUILT_WITH_TSAN ? thread_names : all_names;
-    size_t nnames = BUILT_WITH_TSAN ? 3 : 4;
+    size_t nnames = BUILT_WITH_TSAN ? sizeof thread_names / sizeof *thread_names
+                                    : sizeof all_names / sizeof *all_names;
     if (BUILT_WITH_TSAN)
         CHECK(strstr(out, "load polygons.obj") == NULL);
     for (size_t i = 0; i < nnames; i++) {
@@ -395,7 +396,6 @@ TEST(every_allocation_failing_in_turn_gives_nomem_or_the_right_answer)
     }
     free(out);
 }
-
 
 TEST(example_shoot_py_through_ctypes_prints_what_shoot_prints)
 {

@@ -194,8 +194,9 @@ static int naive_occlusion(const bsp_accel *naive, bsp_query *nq, const bsp_ray 
         int on = bsp_occluded_from(naive, nq, ray, from);
         if (on != found) {
             ++*bad;
-            harness_fail(__FILE__, __LINE__, "%s: query %d (from %u): naive occluded %d but closest hit %d",
-                         name, i, from, on, found);
+            harness_fail(__FILE__, __LINE__,
+                         "%s: query %d (from %u): naive occluded %d but closest hit %d", name, i,
+                         from, on, found);
         }
     }
     return found;
@@ -1124,6 +1125,19 @@ TEST(kd_tree_size_limit)
 
 /* --- every ray of a render ------------------------------------------------------------------ */
 
+/* FNV-1a over the little-endian bytes of the 32-bit words W[0..N), as the
+ * digest is defined (bsp_tree_stats.digest), written out independently. */
+static uint64_t fnv1a_words(const uint32_t *w, size_t n)
+{
+    uint64_t h = 0xcbf29ce484222325ull;
+    for (size_t i = 0; i < n; i++)
+        for (int b = 0; b < 4; b++) {
+            h ^= (uint8_t)(w[i] >> (8 * b));
+            h *= 0x100000001b3ull;
+        }
+    return h;
+}
+
 /* An accelerator that answers with the naive method and checks every kd
  * variant's answer against it (shadow rays: see checked_occluded; test-only:
  * it plugs into accel_internal.h).
@@ -1180,22 +1194,18 @@ static int checked_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ra
 }
 
 /* Whether the naive method checks this shadow ray: one in c->shadow_every,
- * chosen by a hash of the ray's bits, so that the same rays are chosen on
- * any number of threads. */
+ * chosen by a hash of the ray's bits and FROM, so that the same rays are
+ * chosen on any number of threads. */
 static int checked_by_naive(const checked_impl *c, const bsp_ray *ray, uint32_t from)
 {
     if (c->shadow_every <= 1)
         return 1;
-    const double w[8] = {ray->org.x, ray->org.y, ray->org.z, ray->dir.x,
-                         ray->dir.y, ray->dir.z, ray->tmin, ray->tmax};
-    unsigned char bytes[sizeof w];
-    memcpy(bytes, w, sizeof w);
-    uint64_t h = 0xcbf29ce484222325ull ^ from;
-    for (size_t i = 0; i < sizeof bytes; i++) {
-        h ^= bytes[i];
-        h *= 0x100000001b3ull;
-    }
-    return (h >> 32) % (uint64_t)c->shadow_every == 0;
+    const double bits[8] = {ray->org.x, ray->org.y, ray->org.z, ray->dir.x,
+                            ray->dir.y, ray->dir.z, ray->tmin, ray->tmax};
+    uint32_t words[2 * 8 + 1];
+    memcpy(words, bits, sizeof bits);
+    words[2 * 8] = from;
+    return (fnv1a_words(words, 2 * 8 + 1) >> 32) % (uint64_t)c->shadow_every == 0;
 }
 
 /* A shadow ray: every variant against naive on the rays checked_by_naive
@@ -1235,7 +1245,7 @@ static void check_render(const char *spec, int res)
     /* at 513 x 513 the naive method checks one shadow ray in four (its
      * any-hit scans of the unshadowed ones took most of this test's time);
      * the small sanitizer renders check every one */
-    c.shadow_every = res > 65 ? 4 : 1;
+    c.shadow_every = harness_quick() ? 1 : 4;
     checked_generation++;
     bsp_build_options naive_opts;
     bsp_build_options_defaults(&naive_opts);
@@ -1264,15 +1274,13 @@ static void check_render(const char *spec, int res)
     uint64_t all = st.cls[0].rays + st.cls[1].rays + st.cls[2].rays;
     CHECK_EQ_INT(c.rays, all);
     CHECK(st.cls[BSP_RAY_SHADOW].rays > 0);
-    CHECK_EQ_INT(c.shadow_by_naive + c.shadow_by_first, st.cls[BSP_RAY_SHADOW].rays);
+    uint64_t shadow = c.shadow_by_naive + c.shadow_by_first;
+    CHECK_EQ_INT(shadow, st.cls[BSP_RAY_SHADOW].rays);
     /* the hash chooses about one in shadow_every */
-    CHECK_MSG(c.shadow_by_naive * (uint64_t)c.shadow_every * 10 >
-                      (c.shadow_by_naive + c.shadow_by_first) * 9 &&
-                  c.shadow_by_naive * (uint64_t)c.shadow_every * 10 <
-                      (c.shadow_by_naive + c.shadow_by_first) * 11,
+    uint64_t scaled = c.shadow_by_naive * (uint64_t)c.shadow_every * 10;
+    CHECK_MSG(scaled > shadow * 9 && scaled < shadow * 11,
               "%s: %llu of %llu shadow rays checked against naive", spec,
-              (unsigned long long)c.shadow_by_naive,
-              (unsigned long long)(c.shadow_by_naive + c.shadow_by_first));
+              (unsigned long long)c.shadow_by_naive, (unsigned long long)shadow);
     for (int v = 0; v < c.nkd; v++) {
         CHECK_MSG(c.mismatches[v] == 0, "%s with %s (mailbox %d): %llu of %llu rays differ",
                   spec, bsp_accel_kind_name(bsp_accel_get_kind(c.kd[v])), v % 2,
@@ -1302,19 +1310,6 @@ TEST(kd_exact_every_ray_of_balls_render)
 TEST(kd_exact_every_ray_of_tree_render)
 {
     check_render("spd:tree", harness_quick() ? 65 : 513);
-}
-
-/* FNV-1a over the little-endian bytes of the 32-bit words W[0..N), as the
- * digest is defined (bsp_tree_stats.digest), written out independently. */
-static uint64_t fnv1a_words(const uint32_t *w, size_t n)
-{
-    uint64_t h = 0xcbf29ce484222325ull;
-    for (size_t i = 0; i < n; i++)
-        for (int b = 0; b < 4; b++) {
-            h ^= (uint8_t)(w[i] >> (8 * b));
-            h *= 0x100000001b3ull;
-        }
-    return h;
 }
 
 /* The tree digest: a one-sphere tree's (one leaf listing primitive 0) is the
