@@ -20,8 +20,11 @@ OPT     ?= -O2 -g
 SAN     ?=
 WARN    := -Wall -Wextra -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Werror
 CFLAGS  ?=
-ALL_CFLAGS := -std=c11 -D_POSIX_C_SOURCE=200809L $(WARN) $(OPT) $(SAN) -pthread \
-              -Iinclude -Isrc -MMD -MP $(CFLAGS)
+# -ffp-contract=off: no multiply-add is fused, so that a kernel's t has the
+# same bits wherever it is inlined (and in naive_blocks.c's vector copies of
+# the kernels' first tests) even where CFLAGS enables FMA (-march=native)
+ALL_CFLAGS := -std=c11 -D_POSIX_C_SOURCE=200809L $(WARN) $(OPT) $(SAN) -ffp-contract=off \
+              -pthread -Iinclude -Isrc -MMD -MP $(CFLAGS)
 LDLIBS  := -lpng -lz -lm -pthread
 LDFLAGS ?=
 

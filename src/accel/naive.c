@@ -1,6 +1,10 @@
 /*
  * naive.c — the O(N) reference method: every live primitive is tested, in
- * index order. It is what every other method is checked against.
+ * index order. It is what every other method is checked against. The
+ * method's queries scan its blocks (naive_blocks.h: four primitives at a
+ * time, the same answers); the scalar loops here are the definition, taken
+ * by the structures for rays they leave to it and when the blocks would
+ * exceed the memory limit.
  *
  * Ties: a primitive replaces the current closest hit only when its t is
  * strictly smaller, so at equal t the lowest index wins. FROM (the ray's
@@ -9,6 +13,7 @@
 #include <math.h>
 
 #include "accel/accel_internal.h"
+#include "accel/naive_blocks.h"
 
 int naive_scene_intersect(const bsp_scene *s, bsp_query *q, const bsp_ray *ray, uint32_t from,
                           bsp_hit *hit)
@@ -55,20 +60,31 @@ int naive_scene_occluded(const bsp_scene *s, bsp_query *q, const bsp_ray *ray, u
 static int naive_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from,
                            bsp_hit *hit)
 {
+    if (a->impl)
+        return naive_blocks_intersect(a->impl, a->scene, q, ray, from, hit);
     return naive_scene_intersect(a->scene, q, ray, from, hit);
 }
 
 static int naive_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t from)
 {
+    if (a->impl)
+        return naive_blocks_occluded(a->impl, a->scene, q, ray, from);
     return naive_scene_occluded(a->scene, q, ray, from);
 }
 
-static const accel_ops naive_ops = {naive_intersect, naive_occluded, NULL};
+static const accel_ops naive_ops = {naive_intersect, naive_occluded, naive_blocks_destroy};
 
+/* The blocks, unless they would exceed the memory limit (max_tree_bytes, or
+ * half the machine's memory): then the scalar loops, which need none. */
 bsp_status naive_build(bsp_accel *a, bsp_error *err)
 {
-    (void)err;
     a->ops = &naive_ops;
     a->impl = NULL;
-    return BSP_OK;
+    size_t limit = accel_max_bytes(&a->opts);
+    if (limit && naive_blocks_bytes(a->scene) > limit)
+        return BSP_OK;
+    naive_blocks *b = NULL;
+    bsp_status st = naive_blocks_build(a->scene, &b, err);
+    a->impl = b;
+    return st;
 }

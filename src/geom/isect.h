@@ -59,6 +59,20 @@ static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray, double tol)
     r->tol = tol;
 }
 
+/* The first tests of the sphere, cone and triangle kernels, for doubles
+ * (isect_first.h: one text for these kernels and the naive method's blocks). */
+#define ISECT_T double
+#define ISECT_MASK int
+#define ISECT_FIRST(name) name
+#define ISECT_NEG_WHERE(m, x) ((m) ? -(x) : (x))
+#define ISECT_ZERO 0.0
+#include "geom/isect_first.h"
+#undef ISECT_T
+#undef ISECT_MASK
+#undef ISECT_FIRST
+#undef ISECT_NEG_WHERE
+#undef ISECT_ZERO
+
 /* The roots t0 <= t1 of a t^2 + 2 b t + c = 0 given disc = b^2 - a c >= 0
  * (a != 0), by the stable formula: q = -(b + sign(b) sqrt(disc)), the roots
  * q / a and c / q. */
@@ -106,9 +120,8 @@ ISECT_INLINE int sphere_isect(const sphere_shape *s, const isect_ray *ray, doubl
         return 0;
     bsp_vec3 d = ray->dir;
     bsp_vec3 oc = v3_sub(ray->org, s->center);
-    double b = v3_dot(oc, d);
-    bsp_vec3 l = v3_madd(oc, d, -(b / a));
-    double disc = a * (s->radius2 - v3_dot(l, l));
+    double b;
+    double disc = sphere_disc(oc.x, oc.y, oc.z, d.x, d.y, d.z, a, s->radius2, &b);
     if (!(disc >= 0.0))
         return 0;
     double c = v3_dot(oc, oc) - s->radius2;
@@ -145,19 +158,15 @@ ISECT_INLINE int triangle_solve(const triangle_edges *tr, const isect_ray *ray, 
                                 double ts, const int shifted, double tmax, double *t,
                                 double *bu_out, double *bv_out, double *det_out)
 {
-    bsp_vec3 pvec = v3_cross(ray->dir, tr->e2);
-    double det = v3_dot(tr->e1, pvec);
-    bsp_vec3 tvec = v3_sub(org, tr->v0);
-    double bu = v3_dot(tvec, pvec);
-    bsp_vec3 qvec = v3_cross(tvec, tr->e1);
-    double bv = v3_dot(ray->dir, qvec);
+    bsp_vec3 d = ray->dir, tvec = v3_sub(org, tr->v0), qvec;
+    double det, bu, bv;
+    triangle_bary(d.x, d.y, d.z, tvec.x, tvec.y, tvec.z, tr->e1.x, tr->e1.y, tr->e1.z, tr->e2.x,
+                  tr->e2.y, tr->e2.z, &det, &bu, &bv, &qvec.x, &qvec.y, &qvec.z);
     double bt = v3_dot(tr->e2, qvec);
-    const int neg = det < 0.0;
-    det = neg ? -det : det;
-    bu = neg ? -bu : bu;
-    bv = neg ? -bv : bv;
+    int neg;
+    const int in_range = triangle_range(&det, &bu, &bv, &neg);
     bt = neg ? -bt : bt;
-    if (!((det != 0.0) & (bu >= 0.0) & (bu <= det) & (bv >= 0.0) & (bu + bv <= det)))
+    if (!in_range)
         return 0;
     /* The hit check, before the interval: whether the careful path runs
      * must not depend on tmin/tmax, or a closest-hit loop (whose tmax
@@ -298,11 +307,10 @@ ISECT_INLINE int polygon_isect(const polygon_shape *p, const bsp_vec3 *verts,
                                const polygon_slab_pool *slabs, const isect_ray *ray, double tmax,
                                double *t)
 {
-    double denom = v3_dot(p->normal, ray->dir);
-    if (denom == 0.0)
-        return 0;
-    double tt = (p->d - v3_dot(p->normal, ray->org)) / denom;
-    if (!(tt >= ray->tmin && tt <= tmax))
+    const bsp_vec3 n = p->normal, o = ray->org, d = ray->dir;
+    double denom;
+    double tt = polygon_plane(n.x, n.y, n.z, p->d, o.x, o.y, o.z, d.x, d.y, d.z, &denom);
+    if (denom == 0.0 || !(tt >= ray->tmin && tt <= tmax))
         return 0;
     int au = p->axis_u, av = p->axis_v;
     double px = ray->org.v[au] + ray->dir.v[au] * tt;
@@ -355,6 +363,12 @@ ISECT_INLINE int cone_root(const cone_shape *c, const isect_ray *ray, double tma
  * (below). */
 #define CONE_NEAR_SIZES 8.0
 
+/* The middle of C's axis, the point a far origin is moved toward. */
+static inline bsp_vec3 cone_axis_middle(const cone_shape *c)
+{
+    return v3_madd(c->base, c->axis, 0.5 * c->length);
+}
+
 /* From an origin far from the cone (over CONE_NEAR_SIZES sizes from its
  * base) the quadratic is solved from the point of the ray nearest the
  * cone's middle (TS along it): from 10^4 scene scales away its constant
@@ -364,20 +378,17 @@ ISECT_INLINE int cone_root(const cone_shape *c, const isect_ray *ray, double tma
  * and the cone alone, never on tmin/tmax. */
 ISECT_INLINE int cone_isect(const cone_shape *c, const isect_ray *ray, double tmax, double *t)
 {
-    bsp_vec3 oc = v3_sub(ray->org, c->base);
+    const bsp_vec3 o = ray->org, d = ray->dir, ax = c->axis;
+    bsp_vec3 oc = v3_sub(o, c->base);
     double ts = 0.0;
-    if (__builtin_expect(v3_dot(oc, oc) > c->far2, 0)) {
-        bsp_vec3 mid = v3_madd(c->base, c->axis, 0.5 * c->length);
-        ts = v3_dot(v3_sub(mid, ray->org), ray->dir) / ray->dd;
-        oc = v3_sub(v3_madd(ray->org, ray->dir, ts), c->base);
+    if (__builtin_expect(cone_origin_far(oc.x, oc.y, oc.z, c->far2), 0)) {
+        bsp_vec3 mid = cone_axis_middle(c);
+        ts = cone_moved_origin(o.x, o.y, o.z, d.x, d.y, d.z, ray->dd, mid.x, mid.y, mid.z,
+                               c->base.x, c->base.y, c->base.z, &oc.x, &oc.y, &oc.z);
     }
-    double h0 = v3_dot(oc, c->axis), hd = v3_dot(ray->dir, c->axis);
-    bsp_vec3 po = v3_madd(oc, c->axis, -h0);
-    bsp_vec3 pd = v3_madd(ray->dir, c->axis, -hd);
-    double ro = c->base_radius + c->slope * h0, rd = c->slope * hd;
-    double qa = v3_dot(pd, pd) - rd * rd;
-    double qb = v3_dot(po, pd) - ro * rd;
-    double qc = v3_dot(po, po) - ro * ro;
+    double h0, hd, qa, qb, qc;
+    double disc = cone_quadratic(oc.x, oc.y, oc.z, d.x, d.y, d.z, ax.x, ax.y, ax.z,
+                                 c->base_radius, c->slope, &h0, &hd, &qa, &qb, &qc);
 
     double t0, t1;
     if (qa == 0.0) {
@@ -385,7 +396,6 @@ ISECT_INLINE int cone_isect(const cone_shape *c, const isect_ray *ray, double tm
             return 0;
         t0 = t1 = -qc / (2.0 * qb);
     } else {
-        double disc = qb * qb - qa * qc;
         if (!(disc >= 0.0))
             return 0;
         quadratic_roots(qa, qb, qc, disc, &t0, &t1);
