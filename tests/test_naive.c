@@ -257,3 +257,43 @@ TEST(naive_blocks_match_the_scalar_loop_on_stress_shapes)
     compare_scene(s, "far from the origin", harness_quick() ? 5000 : 20000, 22);
     bsp_scene_destroy(s);
 }
+
+/* Under a memory limit too small for the blocks the method scans by the
+ * scalar loop (no blocks built), with the same answers as the blocks. */
+TEST(naive_under_a_tiny_memory_limit_scans_without_blocks)
+{
+    bsp_scene *s = kd_test_load("spd:balls:1");
+    bsp_build_options o;
+    bsp_build_options_defaults(&o);
+    o.kind = BSP_ACCEL_NAIVE;
+    bsp_accel *blocks = NULL, *plain = NULL;
+    bsp_error err;
+    REQUIRE(bsp_accel_build(s, &o, &blocks, &err) == BSP_OK);
+    o.max_tree_bytes = 64;
+    REQUIRE(bsp_accel_build(s, &o, &plain, &err) == BSP_OK);
+    CHECK(blocks->impl != NULL && plain->impl == NULL);
+    bsp_query *qb = bsp_query_create(blocks), *qp = bsp_query_create(plain);
+    REQUIRE(qb && qp);
+    enum { N = 2000 };
+    static bsp_ray rays[N];
+    static uint32_t from[N];
+    unsigned long long rng = 5;
+    kd_test_rays(&rng, bsp_scene_bounds(s), N, bsp_scene_prim_count(s), rays, from);
+    int hits = 0, same = 0;
+    for (int i = 0; i < N; i++) {
+        bsp_hit hb, hp;
+        int fb = bsp_intersect_from(blocks, qb, &rays[i], from[i], &hb);
+        int fp = bsp_intersect_from(plain, qp, &rays[i], from[i], &hp);
+        hits += fp;
+        same += same_hit(fb, &hb, fp, &hp) &&
+                bsp_occluded_from(blocks, qb, &rays[i], from[i]) ==
+                    bsp_occluded_from(plain, qp, &rays[i], from[i]);
+    }
+    CHECK_EQ_INT(same, N);
+    CHECK(hits > N / 20);
+    bsp_query_destroy(qb);
+    bsp_query_destroy(qp);
+    bsp_accel_destroy(blocks);
+    bsp_accel_destroy(plain);
+    bsp_scene_destroy(s);
+}

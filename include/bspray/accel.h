@@ -204,8 +204,9 @@ typedef struct bsp_build_options {
     size_t max_tree_bytes; /* kd-trees, grids, BVHs: the most bytes the nodes (cells) and
                               leaf references may take; a build that needs more fails
                               with BSP_ERR_LIMIT (deep trees of overlapping primitives
-                              grow as 2^depth). 0 (default): half the machine's
-                              physical memory */
+                              grow as 2^depth). naive: where its blocks (docs/naive.md)
+                              would take more, it scans by the scalar loop instead.
+                              0 (default): half the machine's physical memory */
     double grid_density;   /* grid: about this many cells per primitive, cubic cells over
                               the scene's box (each axis at least 1 cell); 0: the default
                               (BSP_GRID_DEFAULT_DENSITY) */
