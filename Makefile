@@ -188,7 +188,7 @@ fuzz:
 	$(MAKE) CC=clang $(FUZZ_TARGETS)
 
 $(FUZZ_BUILD)/fuzz_%: fuzz/fuzz_%.c fuzz/fuzz_input.h $(FUZZ_BUILD)/libbspray.a
-	clang -std=c11 -D_POSIX_C_SOURCE=200809L $(WARN) -O1 -g $(FUZZ_SAN) -fsanitize=fuzzer \
+	clang -std=c11 -D_POSIX_C_SOURCE=200809L $(WARN) -O1 -g -ffp-contract=off $(FUZZ_SAN) -fsanitize=fuzzer \
 	    -Iinclude -Isrc -o $@ $< $(FUZZ_BUILD)/libbspray.a $(LDLIBS)
 
 PREFIX  ?= /usr/local

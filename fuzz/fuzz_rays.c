@@ -2,12 +2,15 @@
  * fuzz_rays.c — libFuzzer target: a scene file through its reader, then a
  * kd-tree (fuzz_input.h) and the naive method answer 64 rays (origins in and
  * around the scene's box, some directions with zero components): the same
- * primitive, the same t bit for bit, the same occlusion. Any difference, a
- * refusal without a message, or a sanitizer report is a finding.
+ * primitive, the same t bit for bit, the same occlusion; so do the naive
+ * method's scalar loops (the definition) and its blocks (the method's own
+ * scans, docs/naive.md). Any difference, a refusal without a message, or a
+ * sanitizer report is a finding.
  */
 #include <math.h>
 #include <string.h>
 
+#include "accel/accel_internal.h"
 #include "fuzz_input.h"
 
 static double unit(uint64_t *s)
@@ -52,8 +55,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *d, size_t n)
                     i, bsp_accel_kind_name(kind), xa, ha.prim, ha.t, xn, hn.prim, hn.t);
             abort();
         }
-        if (bsp_occluded(a, qa, &r) != bsp_occluded(naive, qn, &r)) {
+        int on = bsp_occluded(naive, qn, &r);
+        if (bsp_occluded(a, qa, &r) != on) {
             fprintf(stderr, "ray %d: occlusion differs from naive\n", i);
+            abort();
+        }
+        bsp_hit hs;
+        int xs = naive_scene_intersect(s, qn, &r, BSP_NO_PRIM, &hs);
+        if (xs != xn || (xs && (hs.prim != hn.prim || memcmp(&hs.t, &hn.t, sizeof hs.t))) ||
+            naive_scene_occluded(s, qn, &r, BSP_NO_PRIM) != on) {
+            fprintf(stderr, "ray %d: the naive method's blocks differ from its scalar loop\n", i);
             abort();
         }
     }
