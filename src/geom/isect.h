@@ -59,7 +59,7 @@ static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray, double tol)
     r->tol = tol;
 }
 
-/* The first tests of the sphere, cone and triangle kernels, for doubles
+/* The first tests of the sphere, cone, triangle and polygon kernels, for doubles
  * (isect_first.h: one text for these kernels and the naive method's blocks). */
 #define ISECT_T double
 #define ISECT_MASK int
