@@ -13,6 +13,7 @@
  * scan. test_naive.c compares every scan with the scalar loop.
  */
 #include <math.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -256,22 +257,27 @@ static size_t blocks_of(size_t n)
     return (n + NAIVE_LANES - 1) / NAIVE_LANES;
 }
 
-/* How many live primitives of S have shape SHAPE. */
-static size_t count_shape(const bsp_scene *s, unsigned shape)
+/* The shapes in the order the scan takes them (scan_all's SCAN_SHAPE lines). */
+static const shape_kind scan_order[4] = {SHAPE_SPHERE, SHAPE_CONE, SHAPE_TRIANGLE, SHAPE_POLYGON};
+
+/* N[shape]: how many live primitives of S have each shape (one pass). */
+static void count_shapes(const bsp_scene *s, size_t n[SHAPE_NONE])
 {
-    size_t n = 0;
+    memset(n, 0, SHAPE_NONE * sizeof *n);
     for (size_t i = 0; i < s->nprims; i++)
-        n += s->prims[i].shape == shape;
-    return n;
+        if (s->prims[i].shape < SHAPE_NONE)
+            n[s->prims[i].shape]++;
 }
 
 size_t naive_blocks_bytes(const bsp_scene *s)
 {
+    size_t n[SHAPE_NONE];
+    count_shapes(s, n);
     return sizeof(naive_blocks) + s->nprims * sizeof(size_t) +
-           blocks_of(count_shape(s, SHAPE_SPHERE)) * sizeof(naive_sphere_block) +
-           blocks_of(count_shape(s, SHAPE_CONE)) * sizeof(naive_cone_block) +
-           blocks_of(count_shape(s, SHAPE_TRIANGLE)) * sizeof(naive_triangle_block) +
-           blocks_of(count_shape(s, SHAPE_POLYGON)) * sizeof(naive_polygon_block);
+           blocks_of(n[SHAPE_SPHERE]) * sizeof(naive_sphere_block) +
+           blocks_of(n[SHAPE_CONE]) * sizeof(naive_cone_block) +
+           blocks_of(n[SHAPE_TRIANGLE]) * sizeof(naive_triangle_block) +
+           blocks_of(n[SHAPE_POLYGON]) * sizeof(naive_polygon_block);
 }
 
 void naive_blocks_destroy(void *blocks)
@@ -289,7 +295,17 @@ void naive_blocks_destroy(void *blocks)
 
 /* Fills every lane of the N blocks of SIZE bytes at BLOCKS with NaN data and
  * BSP_NO_PRIM, the padding's values; the primitives then overwrite theirs.
- * (Every block type is doubles followed by NAIVE_LANES primitive indices.) */
+ * Every block type is doubles followed by its NAIVE_LANES primitive indices,
+ * with no padding (asserted below). */
+#define NAIVE_BLOCK_LAYOUT(T)                                                                  \
+    _Static_assert(offsetof(T, prim) % sizeof(double) == 0 &&                                  \
+                       offsetof(T, prim) + sizeof(((T *)0)->prim) == sizeof(T),                \
+                   #T ": doubles, then the primitive indices")
+NAIVE_BLOCK_LAYOUT(naive_sphere_block);
+NAIVE_BLOCK_LAYOUT(naive_cone_block);
+NAIVE_BLOCK_LAYOUT(naive_triangle_block);
+NAIVE_BLOCK_LAYOUT(naive_polygon_block);
+#undef NAIVE_BLOCK_LAYOUT
 static void pad_blocks(void *blocks, size_t n, size_t size)
 {
     const size_t ndoubles = (size - NAIVE_LANES * sizeof(uint32_t)) / sizeof(double);
@@ -320,16 +336,16 @@ bsp_status naive_blocks_build(const bsp_scene *s, naive_blocks **out, bsp_error 
     naive_blocks *b = calloc(1, sizeof *b);
     if (!b)
         return error_set(err, BSP_ERR_NOMEM, NULL, 0, "out of memory (naive method's blocks)");
-    size_t nsph = count_shape(s, SHAPE_SPHERE), ncone = count_shape(s, SHAPE_CONE),
-           ntri = count_shape(s, SHAPE_TRIANGLE), npoly = count_shape(s, SHAPE_POLYGON);
-    b->nsphere_blocks = blocks_of(nsph);
-    b->ncone_blocks = blocks_of(ncone);
-    b->ntriangle_blocks = blocks_of(ntri);
-    b->npolygon_blocks = blocks_of(npoly);
-    b->npolygons = npoly;
-    b->nspheres = nsph;
-    b->ncones = ncone;
-    b->ntriangles = ntri;
+    size_t n[SHAPE_NONE];
+    count_shapes(s, n);
+    b->nspheres = n[SHAPE_SPHERE];
+    b->ncones = n[SHAPE_CONE];
+    b->ntriangles = n[SHAPE_TRIANGLE];
+    b->npolygons = n[SHAPE_POLYGON];
+    b->nsphere_blocks = blocks_of(b->nspheres);
+    b->ncone_blocks = blocks_of(b->ncones);
+    b->ntriangle_blocks = blocks_of(b->ntriangles);
+    b->npolygon_blocks = blocks_of(b->npolygons);
     b->nprims = s->nprims;
     /* malloc(0) may return NULL: every array gets at least one element */
     b->spheres = malloc((b->nsphere_blocks + 1) * sizeof *b->spheres);
@@ -345,19 +361,25 @@ bsp_status naive_blocks_build(const bsp_scene *s, naive_blocks **out, bsp_error 
     pad_blocks(b->cones, b->ncone_blocks, sizeof *b->cones);
     pad_blocks(b->triangles, b->ntriangle_blocks, sizeof *b->triangles);
     pad_blocks(b->polygons, b->npolygon_blocks, sizeof *b->polygons);
-    size_t isph = 0, icone = 0, itri = 0, ipoly = 0;
+    /* next[shape]: the scan position of the shape's next primitive; its
+     * position among its shape's is that less first[shape] */
+    size_t first[SHAPE_NONE], next[SHAPE_NONE], at = 0;
+    for (int k = 0; k < 4; k++) {
+        first[scan_order[k]] = next[scan_order[k]] = at;
+        at += n[scan_order[k]];
+    }
     for (size_t i = 0; i < s->nprims; i++) {
         const prim_record *p = &s->prims[i];
-        b->rank[i] = p->shape == SHAPE_SPHERE     ? isph
-                     : p->shape == SHAPE_CONE     ? nsph + icone
-                     : p->shape == SHAPE_TRIANGLE ? nsph + ncone + itri
-                     : p->shape == SHAPE_POLYGON  ? nsph + ncone + ntri + ipoly
-                                                  : SIZE_MAX;
+        if (p->shape >= SHAPE_NONE) {
+            b->rank[i] = SIZE_MAX;
+            continue;
+        }
+        b->rank[i] = next[p->shape];
+        size_t j = next[p->shape]++ - first[p->shape], l = j % NAIVE_LANES;
         switch ((shape_kind)p->shape) {
         case SHAPE_SPHERE: {
             const sphere_shape *sp = &s->spheres[p->slot];
-            naive_sphere_block *blk = &b->spheres[isph / NAIVE_LANES];
-            size_t l = isph++ % NAIVE_LANES;
+            naive_sphere_block *blk = &b->spheres[j / NAIVE_LANES];
             put3(blk->cx, blk->cy, blk->cz, l, sp->center);
             blk->r2[l] = sp->radius2;
             blk->prim[l] = (uint32_t)i;
@@ -365,8 +387,7 @@ bsp_status naive_blocks_build(const bsp_scene *s, naive_blocks **out, bsp_error 
         }
         case SHAPE_CONE: {
             const cone_shape *c = &s->cones[p->slot];
-            naive_cone_block *blk = &b->cones[icone / NAIVE_LANES];
-            size_t l = icone++ % NAIVE_LANES;
+            naive_cone_block *blk = &b->cones[j / NAIVE_LANES];
             put3(blk->bx, blk->by, blk->bz, l, c->base);
             put3(blk->ax, blk->ay, blk->az, l, c->axis);
             put3(blk->mx, blk->my, blk->mz, l, cone_axis_middle(c));
@@ -378,8 +399,7 @@ bsp_status naive_blocks_build(const bsp_scene *s, naive_blocks **out, bsp_error 
         }
         case SHAPE_TRIANGLE: {
             const triangle_edges *t = &s->triangles[p->slot].edges;
-            naive_triangle_block *blk = &b->triangles[itri / NAIVE_LANES];
-            size_t l = itri++ % NAIVE_LANES;
+            naive_triangle_block *blk = &b->triangles[j / NAIVE_LANES];
             put3(blk->vx, blk->vy, blk->vz, l, t->v0);
             put3(blk->e1x, blk->e1y, blk->e1z, l, t->e1);
             put3(blk->e2x, blk->e2y, blk->e2z, l, t->e2);
@@ -388,8 +408,7 @@ bsp_status naive_blocks_build(const bsp_scene *s, naive_blocks **out, bsp_error 
         }
         case SHAPE_POLYGON: {
             const polygon_shape *pg = &s->polygons[p->slot];
-            naive_polygon_block *blk = &b->polygons[ipoly / NAIVE_LANES];
-            size_t l = ipoly++ % NAIVE_LANES;
+            naive_polygon_block *blk = &b->polygons[j / NAIVE_LANES];
             put3(blk->nx, blk->ny, blk->nz, l, pg->normal);
             blk->d[l] = pg->d;
             blk->prim[l] = (uint32_t)i;
