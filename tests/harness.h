@@ -146,15 +146,19 @@ long harness_count_color(const struct bsp_image *img, int i);
                          check_h_ ? check_h_ : "(null)", check_n_);                         \
     } while (0)
 
-/* Runs CMD (harness_run) and checks its exit status and that its output
- * contains NEEDLE. */
-#define CHECK_RUN(cmd, want_status, needle)                                                 \
+/* Runs CMD (harness_run) once and checks its exit status and that its
+ * output contains NEEDLE and every further needle given (one run for all:
+ * some commands take seconds). */
+#define CHECK_RUN(cmd, want_status, ...)                                                    \
     do {                                                                                    \
         int check_st_;                                                                      \
         char *check_out_ = harness_run((cmd), &check_st_);                                  \
         REQUIRE(check_out_);                                                                \
         CHECK_EQ_INT(check_st_, (want_status));                                             \
-        CHECK_STR_CONTAINS(check_out_, (needle));                                           \
+        const char *const check_needles_[] = {__VA_ARGS__};                                 \
+        for (size_t check_i_ = 0;                                                           \
+             check_i_ < sizeof check_needles_ / sizeof *check_needles_; check_i_++)         \
+            CHECK_STR_CONTAINS(check_out_, check_needles_[check_i_]);                       \
         free(check_out_);                                                                   \
     } while (0)
 

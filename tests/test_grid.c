@@ -304,6 +304,8 @@ TEST(cli_bench_grids_reproduces_havrans_tetra)
     CHECK(rows == 3 && near == 3);
     snprintf(cmd, sizeof cmd, "%s bench --grids spd:shells 2>&1", harness_cli());
     CHECK_RUN(cmd, 2, "not one of Havran's scenes");
+    snprintf(cmd, sizeof cmd, "%s bench --grids spd:tetra --res 0 2>&1", harness_cli());
+    CHECK_RUN(cmd, 2, "--res", "from 1 to 65536");
     remove(csv);
     rmdir(dir);
 }

@@ -368,23 +368,18 @@ TEST(recgrid_is_named_grid_rec_on_the_command_line)
     snprintf(cmd, sizeof cmd,
              "%s stats spd:tetra --accel grid-rec --check --stats-json /dev/stdout 2>&1",
              harness_cli());
-    CHECK_RUN(cmd, 0, "\"grid_levels\": 2");
-    CHECK_RUN(cmd, 0, "\"grid_cell_prims\": 8");
-    CHECK_RUN(cmd, 0, "invariants     ok");
-    CHECK_RUN(cmd, 0, "(cells cut by a grid of their own)");
-    CHECK_RUN(cmd, 0, "grid levels    2");
+    CHECK_RUN(cmd, 0, "\"grid_levels\": 2", "\"grid_cell_prims\": 8", "invariants     ok",
+              "(cells cut by a grid of their own)", "grid levels    2");
     snprintf(cmd, sizeof cmd,
              "%s stats spd:tetra --accel grid --grid-levels 3 --grid-cell-prims 20 "
              "--stats-json /dev/stdout 2>&1",
              harness_cli());
-    CHECK_RUN(cmd, 0, "\"grid_levels\": 3");
-    CHECK_RUN(cmd, 0, "\"grid_cell_prims\": 20");
+    CHECK_RUN(cmd, 0, "\"grid_levels\": 3", "\"grid_cell_prims\": 20");
     /* a bench table names the rows as --accel does */
     snprintf(cmd, sizeof cmd,
              "%s bench spd:tetra --accel grid,grid-rec --res 33 --repeat 1 --quiet 2>&1",
              harness_cli());
-    CHECK_RUN(cmd, 0, "| grid-rec |");
-    CHECK_RUN(cmd, 0, "| grid |");
+    CHECK_RUN(cmd, 0, "| grid-rec |", "| grid |");
 }
 
 /* Havran's recursive grid of LEVELS levels over tetra, as his: density 1,
@@ -454,9 +449,9 @@ TEST(cli_bench_grids_reproduces_havrans_recursive_tetra)
     snprintf(cmd, sizeof cmd,
              "%s bench --grids spd:tetra --grid-kind recursive --quiet --threads 2 --csv %s 2>&1",
              harness_cli(), csv);
-    CHECK_RUN(cmd, 0, "| tetra | 2 | 1057 / 1057 | 31768 / 31768 | 14220 / 14220 | "
-                      "117056 / 117056 |");
-    CHECK_RUN(cmd, 0, "| tetra | 3 | 1565 / 1565 | 40404 / 40404 |");
+    CHECK_RUN(cmd, 0,
+              "| tetra | 2 | 1057 / 1057 | 31768 / 31768 | 14220 / 14220 | 117056 / 117056 |",
+              "| tetra | 3 | 1565 / 1565 | 40404 / 40404 |");
     FILE *f = fopen(csv, "r");
     REQUIRE(f);
     char line[512];

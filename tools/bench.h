@@ -46,14 +46,15 @@ enum {
     BENCH_TAKES_REPEAT = 2, /* --repeat */
     BENCH_TAKES_COSTS = 4,  /* the SAH cost model (parse_cost_arg) */
     BENCH_TAKES_PLOT = 8,   /* --plot */
-    BENCH_TAKES_CELLS = 16  /* the grid's and the octree's (parse_subdivision_arg) */
+    BENCH_TAKES_CELLS = 16, /* the grid's and the octree's (parse_subdivision_arg) */
+    BENCH_TAKES_RES = 32    /* --res alone (Havran's tables) */
 };
 typedef struct bench_cmdline {
     unsigned takes;
     const char *mode_flag;
     const char *const *default_scenes;
     int res_min;
-    int res, depth, mailbox, nvalidate; /* BENCH_TAKES_RENDER */
+    int res, depth, mailbox, nvalidate; /* BENCH_TAKES_RENDER (res: or _RES) */
     int repeat, repeat_given;           /* BENCH_TAKES_REPEAT */
     cost_args costs;                    /* BENCH_TAKES_COSTS */
     const char *plot_path;              /* BENCH_TAKES_PLOT */
@@ -127,26 +128,29 @@ int havran_each_scene(const bench_cmdline *cl, havran_scene_fn fn, void *ctx);
 typedef struct havran_figures {
     double nit, nts, nets, neets;
 } havran_figures;
+/* How a bench of his tables runs: --res (his 513 by default), --threads,
+ * --quiet, --csv (NULL without), and the index of the VARIANT_OPTION's word
+ * (0 without one). */
+typedef struct havran_run {
+    int res, threads, quiet;
+    FILE *csv;
+    int variant;
+} havran_run;
 /* HIS (the structure as his table built it) and OURS (bspray's variant of
  * it), each validated against NAIVE (2,000 random rays and the eye rays),
- * then rendered (513 x 513, ray depth 4, THREADS threads) into *F_HIS and
- * *F_OURS. Returns the rays validated, or -1 after a message naming NAME and
- * STRUCTURE. */
+ * then rendered (RUN's res x res, his 513 by default, ray depth 4, RUN's
+ * threads) into *F_HIS and *F_OURS. Returns the rays validated, or -1 after
+ * a message naming NAME and STRUCTURE. */
 long havran_measure_pair(const bsp_accel *his, const bsp_accel *ours, const bsp_accel *naive,
-                         const char *name, const char *structure, int threads,
+                         const char *name, const char *structure, const havran_run *run,
                          havran_figures *f_his, havran_figures *f_ours);
 /* A bench of his tables: its command line (USAGE, MODE_FLAG, HELP; the
- * operands his scenes, --threads, --csv, --quiet, and VARIANT_OPTION when
+ * operands his scenes, --res, --threads, --csv, --quiet, and VARIANT_OPTION when
  * not NULL, which takes one of VARIANT_WORDS and chooses which of his
  * tables), the CSV's header line and the Markdown table's header (its two
  * lines) of each variant, each variant's caption (a line printed above the table; NULL:
  * none), and EACH, called for every scene with a havran_run as its
  * context, printing its rows. */
-typedef struct havran_run {
-    int threads, quiet;
-    FILE *csv;   /* NULL without --csv */
-    int variant; /* the index of the VARIANT_OPTION's word (0 without one) */
-} havran_run;
 typedef struct havran_bench {
     const char *usage, *mode_flag;
     void (*help)(void);

@@ -42,7 +42,7 @@ static int shared_option(args *a, const char *s, bench_cmdline *c)
     else if ((t & BENCH_TAKES_REPEAT) && !strcmp(s, "--repeat")) {
         c->repeat = parse_int(a, s, 1, 100);
         c->repeat_given = 1;
-    } else if ((t & BENCH_TAKES_RENDER) && !strcmp(s, "--res"))
+    } else if ((t & (BENCH_TAKES_RENDER | BENCH_TAKES_RES)) && !strcmp(s, "--res"))
         c->res = parse_int(a, s, c->res_min > 0 ? c->res_min : 1, 65536);
     else if ((t & BENCH_TAKES_RENDER) && !strcmp(s, "--depth"))
         c->depth = parse_int(a, s, 0, 64);

@@ -17,7 +17,7 @@
 #include "cli.h"
 
 static const char grids_usage[] = "bspray bench --grids [SCENE...] [--grid-kind "
-                                  "uniform|recursive] [--threads N] [--csv FILE] [--quiet]";
+                                  "uniform|recursive] [--res N] [--threads N] [--csv FILE] [--quiet]";
 
 /* One of Havran's uniform grids and his figures for it. */
 typedef struct havran_row {
@@ -77,6 +77,8 @@ static void print_help(void)
            "                 default: all eight)\n"
            "  --grid-kind uniform|recursive  his uniform grids (default) or his recursive\n"
            "                 grids\n"
+           "  --res N        render N x N rays (default 513, his protocol; at another size\n"
+           "                 the per-ray figures do not compare with his, the structure's do)\n"
            "  --threads N    render threads (default: every core); the counts do not depend\n"
            "                 on it\n"
            "  --csv FILE     also write one CSV row per grid\n"
@@ -113,7 +115,7 @@ static int grids_of_scene(const char *bare, const char *name, const bsp_scene *s
                     h->res[2]);
         bsp_accel *hg = row_grid(scene, h, 1), *dg = row_grid(scene, h, 0);
         havran_figures f, fd;
-        long checked = havran_measure_pair(hg, dg, naive, name, "grid", run->threads, &f, &fd);
+        long checked = havran_measure_pair(hg, dg, naive, name, "grid", run, &f, &fd);
         if (checked >= 0) {
             bsp_tree_stats st;
             bsp_accel_tree_stats(hg, &st);

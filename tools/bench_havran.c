@@ -67,7 +67,7 @@ int havran_each_scene(const bench_cmdline *cl, havran_scene_fn fn, void *ctx)
 
 /* One structure of havran_measure_pair. */
 static long measure_one(const bsp_accel *accel, const bsp_accel *naive, const char *name,
-                        const char *structure, int threads, havran_figures *f)
+                        const char *structure, const havran_run *run, havran_figures *f)
 {
     char what[256];
     long checked = bench_validate(accel, naive, bsp_accel_scene(accel), 2000, what, sizeof what);
@@ -78,9 +78,9 @@ static long measure_one(const bsp_accel *accel, const bsp_accel *naive, const ch
     }
     bsp_render_options ro;
     bsp_render_options_defaults(&ro);
-    ro.width = ro.height = 513;
+    ro.width = ro.height = run->res;
     ro.max_depth = 4;
-    ro.threads = threads;
+    ro.threads = run->threads;
     bsp_image *img = NULL;
     bsp_render_stats st;
     bsp_error err;
@@ -106,15 +106,15 @@ static long measure_one(const bsp_accel *accel, const bsp_accel *naive, const ch
 }
 
 long havran_measure_pair(const bsp_accel *his, const bsp_accel *ours, const bsp_accel *naive,
-                         const char *name, const char *structure, int threads,
+                         const char *name, const char *structure, const havran_run *run,
                          havran_figures *f_his, havran_figures *f_ours)
 {
-    long a = measure_one(his, naive, name, structure, threads, f_his);
+    long a = measure_one(his, naive, name, structure, run, f_his);
     if (a < 0)
         return -1;
     char what[96];
     snprintf(what, sizeof what, "%s (bspray's variant)", structure);
-    long b = measure_one(ours, naive, name, what, threads, f_ours);
+    long b = measure_one(ours, naive, name, what, run, f_ours);
     return b < 0 ? -1 : a + b;
 }
 
@@ -140,11 +140,11 @@ int havran_bench_main(int argc, char **argv, const havran_bench *b)
 {
     args a = {argc, 1, argv, b->usage, NULL};
     bench_cmdline cl;
-    bench_cmdline_init(&cl, 0, b->mode_flag, havran_scenes);
+    bench_cmdline_init(&cl, BENCH_TAKES_RES, b->mode_flag, havran_scenes);
     havran_cmdline h = {&cl, b, 0};
     if (bench_read_cmdline(&a, &cl, havran_arg, &h, b->help))
         return 0;
-    havran_run run = {cl.threads, cl.quiet, NULL, h.variant};
+    havran_run run = {cl.res, cl.threads, cl.quiet, NULL, h.variant};
     if (!bench_cmdline_ready(&cl, 0, &run.csv))
         return EXIT_INPUT;
     const int v = b->table_header[run.variant] ? run.variant : 0;
@@ -152,6 +152,10 @@ int havran_bench_main(int argc, char **argv, const havran_bench *b)
         fprintf(run.csv, "%s\n", b->csv_header[v]);
     if (b->variant_captions[run.variant])
         printf("%s\n\n", b->variant_captions[run.variant]);
+    if (run.res != 513) /* his protocol: the structure's figures still are his */
+        printf("Rendered at %d x %d, not his 513 x 513: the per-ray figures (N_IT, N_TS, "
+               "N_ETS, N_EETS) are not comparable with his.\n\n",
+               run.res, run.res);
     printf("%s\n", b->table_header[v]);
     int rc = havran_each_scene(&cl, b->each, &run);
     if (run.csv && !close_output(run.csv, cl.csv_path))

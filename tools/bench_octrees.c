@@ -18,7 +18,7 @@
 #include "cli.h"
 
 static const char octrees_usage[] = "bspray bench --octrees [SCENE...] [--octree-split "
-                                    "centre|cost] [--threads N] [--csv FILE] [--quiet]";
+                                    "centre|cost] [--res N] [--threads N] [--csv FILE] [--quiet]";
 
 /* One of Havran's octrees (bounds assignment, at most one primitive per
  * leaf) and his figures for it. */
@@ -119,6 +119,8 @@ static void print_help(void)
            "  --octree-split centre|cost  the octree of centre subdivision beside his\n"
            "                 Octree84-C (Glassner's; default), or the adaptive one, cut by\n"
            "                 his cost estimate, beside his Octree84-A\n"
+           "  --res N        render N x N rays (default 513, his protocol; at another size\n"
+           "                 the per-ray figures do not compare with his, the structure's do)\n"
            "  --threads N    render threads (default: every core); the counts do not depend\n"
            "                 on it\n"
            "  --csv FILE     also write one CSV row per octree\n"
@@ -156,7 +158,7 @@ static int octrees_of_scene(const char *bare, const char *name, const bsp_scene 
         bsp_accel *plain = row_octree(scene, h, split, 0), *mb = row_octree(scene, h, split, 1);
         havran_figures f, fm;
         long checked =
-            havran_measure_pair(plain, mb, naive, name, "octree", run->threads, &f, &fm);
+            havran_measure_pair(plain, mb, naive, name, "octree", run, &f, &fm);
         if (checked >= 0) {
             bsp_tree_stats st;
             bsp_accel_tree_stats(plain, &st);

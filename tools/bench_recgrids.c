@@ -80,7 +80,7 @@ int recgrids_of_scene(const char *bare, const char *name, const bsp_scene *scene
         bsp_accel *his = row_recgrid(scene, h, 1), *ours = row_recgrid(scene, h, 0);
         havran_figures f, fo;
         long checked =
-            havran_measure_pair(his, ours, naive, name, "recursive grid", run->threads, &f, &fo);
+            havran_measure_pair(his, ours, naive, name, "recursive grid", run, &f, &fo);
         if (checked >= 0) {
             bsp_tree_stats st;
             bsp_accel_tree_stats(his, &st);
