@@ -388,6 +388,23 @@ lin_node_small(const sah_build *b, const uint64_t *ev, size_t stride, size_t n, 
     }
 }
 
+/* lin_node of each cost mode, with and without mailboxes: a function each,
+ * called from both entry points below (inlined into each, the file took
+ * the compiler minutes under the sanitizers); a call per node. */
+#define LIN_NODE_SPEC(MODE, MAILBOX)                                                            \
+    static __attribute__((noinline)) void lin_node_##MODE##_##MAILBOX(                         \
+        sah_build *b, const uint64_t *ev, size_t stride, size_t n, double tsum,                \
+        const bsp_box *cell, const lin_model *lm, split_choice *best)                          \
+    {                                                                                           \
+        lin_node(b, ev, stride, n, tsum, cell, lm, best, MODE, MAILBOX);                        \
+    }
+LIN_NODE_SPEC(COST_UNIFORM, 0)
+LIN_NODE_SPEC(COST_UNIFORM, 1)
+LIN_NODE_SPEC(COST_CLASS, 0)
+LIN_NODE_SPEC(COST_CLASS, 1)
+LIN_NODE_SPEC(COST_ARRAY, 0)
+LIN_NODE_SPEC(COST_ARRAY, 1)
+
 #define LIN_CASE(MODE)                                                                          \
     case MODE:                                                                                  \
         if (small && b->mailbox)                                                                \
@@ -395,9 +412,9 @@ lin_node_small(const sah_build *b, const uint64_t *ev, size_t stride, size_t n, 
         else if (small)                                                                         \
             lin_node_small(b, ev, stride, n, tsum, cell, &lm, best, MODE, 0);                   \
         else if (b->mailbox)                                                                    \
-            lin_node(b, ev, stride, n, tsum, cell, &lm, best, MODE, 1);                         \
+            lin_node_##MODE##_1(b, ev, stride, n, tsum, cell, &lm, best);                       \
         else                                                                                    \
-            lin_node(b, ev, stride, n, tsum, cell, &lm, best, MODE, 0);                         \
+            lin_node_##MODE##_0(b, ev, stride, n, tsum, cell, &lm, best);                       \
         break;
 
 /* The best plane by the one-pass sweep when the node is too small for runs

@@ -498,13 +498,20 @@ mpruned(msweep *s, size_t a, size_t z, mstate st, mbest *best, const int mode,
 
 /* --- the sweep ---------------------------------------------------------------------------- */
 
+/* mfull and mpruned of one specialisation (cost mode x measure x
+ * mailboxes): a function each, which sweep_axis calls up to four and two
+ * times (inlined there, the compiler took minutes under the sanitizers). */
+typedef void (*mfull_fn)(msweep *s, size_t from, size_t to, mstate st, mbest *best);
+typedef int (*mpruned_fn)(msweep *s, size_t a, size_t z, mstate st, mbest *best);
+
 /* Evaluates the candidates of axis K (the node's sorted events E[0..M))
  * strictly inside CELL, keeping the cheapest in *BEST (ties: the earlier
- * axis, then the lower position). */
+ * axis, then the lower position); FULL and PRUNED: mfull and mpruned of
+ * this MODE, SURFACE and MAILBOX. */
 static inline __attribute__((always_inline)) void
 sweep_axis(sah_build *b, const uint64_t *e, size_t m, unsigned k, const bsp_box *cell,
            double inv_area, double tsum, size_t n, const int mode, const int surface,
-           const int mailbox, split_choice *best_out)
+           mfull_fn full, mpruned_fn pruned, split_choice *best_out)
 {
     msweep s;
     msweep_init(&s, b, e, k, cell, inv_area, tsum, n);
@@ -532,7 +539,7 @@ sweep_axis(sah_build *b, const uint64_t *e, size_t m, unsigned k, const bsp_box 
     s.margin_abs = NOISE_WEIGHT * noise * tot_scale;
     mbest best = {best_out->cost, SIZE_MAX};
     if (!(s.margin_abs < INFINITY)) {
-        mfull(&s, i, z, st, &best, mode, surface, mailbox);
+        full(&s, i, z, st, &best);
     } else {
         size_t z1 = z, z2 = z;
         mstate st1 = st, st2 = st;
@@ -543,12 +550,12 @@ sweep_axis(sah_build *b, const uint64_t *e, size_t m, unsigned k, const bsp_box 
             for (z2 = z1; z2 < z && ev_pos(e[z2]) <= zone[1]; z2++)
                 mstep(&s, &st2, e[z2], mode);
         }
-        if (z1 > i && !mpruned(&s, i, z1, st, &best, mode, surface, mailbox))
-            mfull(&s, i, z1, st, &best, mode, surface, mailbox);
+        if (z1 > i && !pruned(&s, i, z1, st, &best))
+            full(&s, i, z1, st, &best);
         if (z2 > z1)
-            mfull(&s, z1, z2, st1, &best, mode, surface, mailbox);
-        if (z > z2 && !mpruned(&s, z2, z, st2, &best, mode, surface, mailbox))
-            mfull(&s, z2, z, st2, &best, mode, surface, mailbox);
+            full(&s, z1, z2, st1, &best);
+        if (z > z2 && !pruned(&s, z2, z, st2, &best))
+            full(&s, z2, z, st2, &best);
     }
     if (best.i != SIZE_MAX) {
         best_out->cost = best.c;
@@ -558,16 +565,46 @@ sweep_axis(sah_build *b, const uint64_t *e, size_t m, unsigned k, const bsp_box 
     }
 }
 
+/* Each specialisation of the sweep (cost mode x measure x mailboxes): its
+ * sweep of an axis, its mfull and its mpruned, each a function of its own. */
+#define SWEEP_SPEC(MODE, SURFACE, MAILBOX)                                                      \
+    static __attribute__((noinline)) void mfull_##MODE##_##SURFACE##_##MAILBOX(                \
+        msweep *s, size_t from, size_t to, mstate st, mbest *best)                             \
+    {                                                                                           \
+        mfull(s, from, to, st, best, MODE, SURFACE, MAILBOX);                                   \
+    }                                                                                           \
+    static __attribute__((noinline)) int mpruned_##MODE##_##SURFACE##_##MAILBOX(               \
+        msweep *s, size_t a, size_t z, mstate st, mbest *best)                                 \
+    {                                                                                           \
+        return mpruned(s, a, z, st, best, MODE, SURFACE, MAILBOX);                              \
+    }                                                                                           \
+    static __attribute__((noinline)) void sweep_##MODE##_##SURFACE##_##MAILBOX(                \
+        sah_build *b, const uint64_t *e, size_t m, unsigned k, const bsp_box *cell,            \
+        double inv_area, double tsum, size_t n, split_choice *best)                            \
+    {                                                                                           \
+        sweep_axis(b, e, m, k, cell, inv_area, tsum, n, MODE, SURFACE,                         \
+                   mfull_##MODE##_##SURFACE##_##MAILBOX,                                       \
+                   mpruned_##MODE##_##SURFACE##_##MAILBOX, best);                              \
+    }
+#define SWEEP_SPECS(MODE)                                                                       \
+    SWEEP_SPEC(MODE, 1, 1)                                                                      \
+    SWEEP_SPEC(MODE, 1, 0)                                                                      \
+    SWEEP_SPEC(MODE, 0, 1)                                                                      \
+    SWEEP_SPEC(MODE, 0, 0)
+SWEEP_SPECS(COST_UNIFORM)
+SWEEP_SPECS(COST_CLASS)
+SWEEP_SPECS(COST_ARRAY)
+
 #define SWEEP_CASE(MODE)                                                                        \
     case MODE:                                                                                  \
         if (surface && b->mailbox)                                                              \
-            sweep_axis(b, e, m, k, cell, inv_area, tsum, n, MODE, 1, 1, best);                  \
+            sweep_##MODE##_1_1(b, e, m, k, cell, inv_area, tsum, n, best);                      \
         else if (surface)                                                                       \
-            sweep_axis(b, e, m, k, cell, inv_area, tsum, n, MODE, 1, 0, best);                  \
+            sweep_##MODE##_1_0(b, e, m, k, cell, inv_area, tsum, n, best);                      \
         else if (b->mailbox)                                                                    \
-            sweep_axis(b, e, m, k, cell, inv_area, tsum, n, MODE, 0, 1, best);                  \
+            sweep_##MODE##_0_1(b, e, m, k, cell, inv_area, tsum, n, best);                      \
         else                                                                                    \
-            sweep_axis(b, e, m, k, cell, inv_area, tsum, n, MODE, 0, 0, best);                  \
+            sweep_##MODE##_0_0(b, e, m, k, cell, inv_area, tsum, n, best);                      \
         break;
 
 /* The sweep of axis K, specialised by cost mode and measure. */
