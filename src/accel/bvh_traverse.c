@@ -181,14 +181,15 @@ walk(const bvh *t, const bvh_ray *r, double tmin, const double *tmax, bvh_walk *
     }
 }
 
-static inline __attribute__((always_inline)) int closest_leaf(void *ctx, uint32_t first,
-                                                              uint32_t cnt)
+/* The leaves' tests, a function each: walk calls a leaf from four places,
+ * and the kernels inlined into each took the compiler most of its time on
+ * this file (a call per leaf, whose tests cost far more). */
+static __attribute__((noinline)) int closest_leaf(void *ctx, uint32_t first, uint32_t cnt)
 {
     return leaf_records(ctx, first, cnt, 0);
 }
 
-static inline __attribute__((always_inline)) int any_leaf(void *ctx, uint32_t first,
-                                                          uint32_t cnt)
+static __attribute__((noinline)) int any_leaf(void *ctx, uint32_t first, uint32_t cnt)
 {
     return leaf_records(ctx, first, cnt, 1);
 }
