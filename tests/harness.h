@@ -53,6 +53,13 @@ static inline int harness_quick(void)
     const char *q = getenv("BSPRAY_TEST_QUICK");
     return q && *q && *q != '0';
 }
+/* In quick mode, ends the test as skipped, saying WHY (the sanitizer run
+ * leaves out a few checks of figures that do not depend on the build). */
+static inline void harness_skip_in_quick_mode(const char *why)
+{
+    if (harness_quick())
+        harness_skip("quick mode (BSPRAY_TEST_QUICK): %s", why);
+}
 /* Marsaglia's xorshift64 step (13, 7, 17) of the state *S, and a uniform
  * double in [0, 1) from it: the generator of the older tests, kept so that
  * their seeds give the same cases. */

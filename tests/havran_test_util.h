@@ -42,6 +42,13 @@ static inline havran_test_totals havran_test_sum(const bsp_render_stats *st)
     return t;
 }
 
+/* Why quick mode (the sanitizer run) skips a test of his figures: they are
+ * of 513 x 513 renders and the same in every build of the library (make
+ * test checks them); the structures and the renderer run under the
+ * sanitizers in the exactness and render tests. */
+#define HAVRAN_FIGURES_FULL_ONLY \
+    "Havran's figures (of 513 x 513 renders, the same in every build) are make test's check"
+
 /* Renders A as his tables were (the renderer's defaults: 513 x 513 rays of
  * ray depth 4) and returns the counts summed over the ray classes; ends the
  * test when the render fails or shoots too few rays for his figures. */

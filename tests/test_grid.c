@@ -185,6 +185,7 @@ TEST(grid_rays_match_havrans_on_balls)
 {
     /* his (46, 46, 3) grid on balls, no mailboxes: N_IT 358.66, N_TS =
      * N_ETS 5.69, N_EETS 3.00 per ray of the whole render */
+    harness_skip_in_quick_mode(HAVRAN_FIGURES_FULL_ONLY);
     bsp_scene *s = spd_scene("balls");
     const int res[3] = {46, 46, 3};
     bsp_accel *a = grid_of(s, 0.0, res, 0, 1);
@@ -275,6 +276,7 @@ TEST(grid_keeps_to_the_size_limit)
 
 TEST(cli_bench_grids_reproduces_havrans_tetra)
 {
+    harness_skip_in_quick_mode(HAVRAN_FIGURES_FULL_ONLY);
     char dir[] = "/tmp/bspray-grids-XXXXXX";
     REQUIRE(mkdtemp(dir));
     char csv[256], cmd[768];

@@ -338,6 +338,7 @@ TEST(octree_rays_traverse_havrans_cells_on_balls)
         bsp_octree_split split;
         double nets, neets;
     } his[] = {{BSP_OCTREE_CENTRE, 15.39, 9.52}, {BSP_OCTREE_COST, 8.35, 4.62}};
+    harness_skip_in_quick_mode(HAVRAN_FIGURES_FULL_ONLY);
     bsp_scene *s = havran_test_scene("spd:balls");
     for (int i = 0; i < 2; i++) {
         bsp_accel *a = octree_split_of(s, 5, 0, his[i].split);

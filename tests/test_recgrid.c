@@ -442,6 +442,7 @@ TEST(recgrid_matches_havrans_on_tetra)
 
 TEST(cli_bench_grids_reproduces_havrans_recursive_tetra)
 {
+    harness_skip_in_quick_mode(HAVRAN_FIGURES_FULL_ONLY);
     char dir[] = "/tmp/bspray-recgrids-XXXXXX";
     REQUIRE(mkdtemp(dir));
     char csv[256], cmd[768];
