@@ -499,8 +499,10 @@ mpruned(msweep *s, size_t a, size_t z, mstate st, mbest *best, const int mode,
 /* --- the sweep ---------------------------------------------------------------------------- */
 
 /* mfull and mpruned of one specialisation (cost mode x measure x
- * mailboxes): a function each, which sweep_axis calls up to four and two
- * times (inlined there, the compiler took minutes under the sanitizers). */
+ * mailboxes), a function each (SWEEP_SPEC): sweep_axis calls them from four
+ * and two places, and with all of it inlined into one function the file
+ * took 19 s to compile, 75 s under the sanitizers (now 6 s and 22 s); a
+ * call per range of candidates costs nothing measurable. */
 typedef void (*mfull_fn)(msweep *s, size_t from, size_t to, mstate st, mbest *best);
 typedef int (*mpruned_fn)(msweep *s, size_t a, size_t z, mstate st, mbest *best);
 
