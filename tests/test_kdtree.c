@@ -146,20 +146,6 @@ static int quick_skips_view_variant(const bsp_scene *scene, int kind, int mailbo
            bsp_scene_prim_count(scene) > 2000;
 }
 
-/* Whether the invariant checker runs on a variant of KIND, CHECKED[KIND]
- * saying whether one of that kind was checked already (and set here). Quick
- * mode (the sanitizer run) checks the first of each kind: the library builds
- * the same trees with and without the sanitizers, and the full suite (make
- * test) checks every variant; the checker's walks of the second and third
- * trees of a kind took a fifth of the sanitizer run's exactness tests. Every
- * variant's answers are compared with naive either way. */
-static int runs_checker(int kind, unsigned char checked[BSP_ACCEL_KIND_COUNT])
-{
-    int first = !checked[kind];
-    checked[kind] = 1;
-    return first || !harness_quick();
-}
-
 /* Whether ACCEL was built with mailboxes (for the messages). */
 static int has_mailbox(const bsp_accel *accel)
 {
@@ -243,7 +229,6 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
     bsp_query *qs[KD_VARIANTS_MAX];
     bsp_build_options variants[KD_VARIANTS_MAX];
     int nvariants = kd_variants(variants), nv = 0;
-    unsigned char checked[BSP_ACCEL_KIND_COUNT] = {0};
     for (int vi = 0; vi < nvariants; vi++) {
         {
             bsp_build_options o = variants[vi];
@@ -266,11 +251,9 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
                       err.message);
             if (st != BSP_OK)
                 continue;
-            if (runs_checker((int)o.kind, checked)) {
-                st = bsp_accel_check(acc[nv], &err);
-                CHECK_MSG(st == BSP_OK, "%s: %s tree invariant: %s", name,
-                          bsp_accel_kind_name(o.kind), err.message);
-            }
+            st = bsp_accel_check(acc[nv], &err);
+            CHECK_MSG(st == BSP_OK, "%s: %s tree invariant: %s", name,
+                      bsp_accel_kind_name(o.kind), err.message);
             qs[nv] = bsp_query_create(acc[nv]);
             nv++;
         }
@@ -1288,12 +1271,9 @@ static void check_render(const char *spec, int res)
     REQUIRE(bsp_accel_build(s, &naive_opts, &c.naive, &err) == BSP_OK);
     bsp_build_options variants[KD_VARIANTS_MAX];
     int nvariants = kd_variants(variants);
-    unsigned char checked[BSP_ACCEL_KIND_COUNT] = {0};
     for (int vi = 0; vi < nvariants; vi++) {
         REQUIRE(bsp_accel_build(s, &variants[vi], &c.kd[c.nkd], &err) == BSP_OK);
-        if (runs_checker((int)variants[vi].kind, checked))
-            CHECK_MSG(bsp_accel_check(c.kd[c.nkd], &err) == BSP_OK, "%s: %s", spec,
-                      err.message);
+        CHECK_MSG(bsp_accel_check(c.kd[c.nkd], &err) == BSP_OK, "%s: %s", spec, err.message);
         c.naive_shadow_only[c.nkd] =
             variants[vi].kind == BSP_ACCEL_GRID || variants[vi].kind == BSP_ACCEL_OCTREE;
         c.nkd++;
