@@ -306,10 +306,9 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
                              "[%.17g, %.17g]): naive %d prim %u t %.17g occl %d; kd %d prim %u "
                              "t %.17g occl %d",
                              name, bsp_accel_kind_name(bsp_accel_get_kind(acc[v])),
-                             has_mailbox(acc[v]), i,
-                             r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y, r.dir.z, r.tmin, r.tmax,
-                             fn, fn ? hn.prim : 0, fn ? hn.t : 0, on, fk, fk ? hk.prim : 0,
-                             fk ? hk.t : 0, ok);
+                             has_mailbox(acc[v]), i, r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y,
+                             r.dir.z, r.tmin, r.tmax, fn, fn ? hn.prim : 0, fn ? hn.t : 0, on, fk,
+                             fk ? hk.prim : 0, fk ? hk.t : 0, ok);
             }
         }
         /* every other ray that hits, again with its hit primitive left out
@@ -341,10 +340,9 @@ static void check_scene(const bsp_scene *scene, const char *name, int nrays, uin
                                      "%s: %s mailbox %d, ray %d (%s) leaving out %u: naive %d prim "
                                      "%u t %.17g occl %d; kd %d prim %u t %.17g occl %d",
                                      name, bsp_accel_kind_name(bsp_accel_get_kind(acc[v])),
-                                     has_mailbox(acc[v]),
-                                     i, w ? "on from the hit" : "the same", hn.prim, ff,
-                                     ff ? hf.prim : 0, ff ? hf.t : 0, of, fk, fk ? hkf.prim : 0,
-                                     fk ? hkf.t : 0, ok);
+                                     has_mailbox(acc[v]), i, w ? "on from the hit" : "the same",
+                                     hn.prim, ff, ff ? hf.prim : 0, ff ? hf.t : 0, of, fk,
+                                     fk ? hkf.prim : 0, fk ? hkf.t : 0, ok);
                     }
                 }
             }

@@ -17,7 +17,8 @@
 #include "cli.h"
 
 static const char grids_usage[] = "bspray bench --grids [SCENE...] [--grid-kind "
-                                  "uniform|recursive] [--res N] [--threads N] [--csv FILE] [--quiet]";
+                                  "uniform|recursive] [--res N] [--threads N] [--csv FILE] "
+                                  "[--quiet]";
 
 /* One of Havran's uniform grids and his figures for it. */
 typedef struct havran_row {
