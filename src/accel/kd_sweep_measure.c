@@ -498,11 +498,7 @@ mpruned(msweep *s, size_t a, size_t z, mstate st, mbest *best, const int mode,
 
 /* --- the sweep ---------------------------------------------------------------------------- */
 
-/* mfull and mpruned of one specialisation (cost mode x measure x
- * mailboxes), a function each (SWEEP_SPEC): sweep_axis calls them from four
- * and two places, and with all of it inlined into one function the file
- * took 19 s to compile, 75 s under the sanitizers (now 6 s and 22 s); a
- * call per range of candidates costs nothing measurable. */
+/* mfull and mpruned of one specialisation (SWEEP_SPEC). */
 typedef void (*mfull_fn)(msweep *s, size_t from, size_t to, mstate st, mbest *best);
 typedef int (*mpruned_fn)(msweep *s, size_t a, size_t z, mstate st, mbest *best);
 
@@ -568,7 +564,11 @@ sweep_axis(sah_build *b, const uint64_t *e, size_t m, unsigned k, const bsp_box 
 }
 
 /* Each specialisation of the sweep (cost mode x measure x mailboxes): its
- * sweep of an axis, its mfull and its mpruned, each a function of its own. */
+ * sweep of an axis, its mfull and its mpruned, each a function of its own.
+ * sweep_axis calls mfull from four places and mpruned from two; with all of
+ * it inlined into one function the file took 19 s to compile, 75 s under
+ * the sanitizers (now 6 s and 22 s). A call per range of candidates costs
+ * nothing measurable. */
 #define SWEEP_SPEC(MODE, SURFACE, MAILBOX)                                                      \
     static __attribute__((noinline)) void mfull_##MODE##_##SURFACE##_##MAILBOX(                \
         msweep *s, size_t from, size_t to, mstate st, mbest *best)                             \

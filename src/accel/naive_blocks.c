@@ -364,7 +364,7 @@ bsp_status naive_blocks_build(const bsp_scene *s, naive_blocks **out, bsp_error 
     /* next[shape]: the scan position of the shape's next primitive; its
      * position among its shape's is that less first[shape] */
     size_t first[SHAPE_NONE], next[SHAPE_NONE], at = 0;
-    for (int k = 0; k < 4; k++) {
+    for (size_t k = 0; k < sizeof scan_order / sizeof *scan_order; k++) {
         first[scan_order[k]] = next[scan_order[k]] = at;
         at += n[scan_order[k]];
     }
