@@ -1,8 +1,13 @@
 /*
  * main.c — the test runner: runs every registered test (or those whose name
- * contains argv[1]) and ends with the plain line "N passed, N failed" (plus
- * ", N skipped" when some were skipped). Exit status 0 only if none failed.
+ * or file contains the one argument), each in a forked process of its own,
+ * several at a time (--jobs), and ends with the plain line "N passed, N
+ * failed" (plus ", N skipped" when some were skipped). Exit status 0 only if
+ * none failed. A test that crashes, or whose process a sanitizer ends, is a
+ * failure of that test alone.
  */
+#include <errno.h>
+#include <fcntl.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -18,10 +23,12 @@
 #include "render/plot.h"
 
 #define MAX_TESTS 4096
+#define MAX_JOBS 16
 
 typedef struct test_entry {
     const char *name, *file;
     test_fn fn;
+    double secs; /* the last run's time (or the times file's, before the run) */
 } test_entry;
 
 static test_entry tests[MAX_TESTS];
@@ -32,7 +39,7 @@ static jmp_buf current_jmp;
 void harness_register(const char *name, const char *file, test_fn fn)
 {
     if (ntests < MAX_TESTS)
-        tests[ntests++] = (test_entry){name, file, fn};
+        tests[ntests++] = (test_entry){name, file, fn, 0.0};
 }
 
 void harness_fail(const char *file, int line, const char *fmt, ...)
@@ -154,14 +161,30 @@ char *harness_run(const char *cmd, int *status)
     return buf;
 }
 
+/* The run's temporary directory (made by the runner) and, in a test's own
+ * process, that test's subdirectory of it: tests running side by side never
+ * share a file name. */
+static char tmp_root[256], tmp_dir[320];
+static pid_t tmp_root_owner;
+
 const char *harness_tmpdir(void)
 {
-    static char dir[256];
-    if (!dir[0]) {
-        snprintf(dir, sizeof dir, "/tmp/bspray-tests-%ld", (long)getpid());
-        mkdir(dir, 0700);
+    if (!tmp_root[0]) {
+        tmp_root_owner = getpid();
+        snprintf(tmp_root, sizeof tmp_root, "/tmp/bspray-tests-%ld", (long)tmp_root_owner);
+        mkdir(tmp_root, 0700);
     }
-    return dir;
+    if (!tmp_dir[0])
+        snprintf(tmp_dir, sizeof tmp_dir, "%s", tmp_root);
+    return tmp_dir;
+}
+
+/* In a forked test: its own subdirectory, named by the test's index. */
+static void enter_test_tmpdir(int index)
+{
+    harness_tmpdir();
+    snprintf(tmp_dir, sizeof tmp_dir, "%s/t%d", tmp_root, index);
+    mkdir(tmp_dir, 0700);
 }
 
 /* Runs one test; returns 0 passed, 1 failed, 2 skipped. Kept apart from main
@@ -175,13 +198,16 @@ static int run_one(test_fn fn)
     return current_failed ? 1 : current_skipped ? 2 : 0;
 }
 
+/* At exit of the runner itself (not of a forked test, which inherits the
+ * handler): the whole temporary tree. */
 static void remove_tmpdir(void)
 {
-    const char *dir = harness_tmpdir();
+    if (!tmp_root[0] || getpid() != tmp_root_owner)
+        return;
     char cmd[512];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp_root);
     if (system(cmd) != 0)
-        fprintf(stderr, "warning: could not remove %s\n", dir);
+        fprintf(stderr, "warning: could not remove %s\n", tmp_root);
 }
 
 static int cmp_tests(const void *a, const void *b)
@@ -191,41 +217,278 @@ static int cmp_tests(const void *a, const void *b)
     return c ? c : strcmp(x->name, y->name);
 }
 
+static double seconds_since(const struct timespec *t0)
+{
+    struct timespec t1;
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    return (double)(t1.tv_sec - t0->tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0->tv_nsec);
+}
+
+typedef struct tally {
+    int passed, failed, skipped;
+    double total_secs; /* the tests' own times, summed */
+    char failed_names[4096];
+} tally;
+
+static void record(tally *t, int i, int outcome, double secs)
+{
+    const char *verdict = "ok  ";
+    if (outcome == 1) {
+        t->failed++;
+        verdict = "FAIL";
+        size_t used = strlen(t->failed_names);
+        snprintf(t->failed_names + used, sizeof t->failed_names - used, "%s%s",
+                 used ? ", " : "", tests[i].name);
+    } else if (outcome == 2) {
+        t->skipped++;
+        verdict = "skip";
+    } else {
+        t->passed++;
+    }
+    t->total_secs += secs;
+    tests[i].secs = secs;
+    fprintf(stderr, "%s %-48s %7.2fs  (%s)\n", verdict, tests[i].name, secs, tests[i].file);
+}
+
+/* The selected tests one after another in this process (--in-process: for a
+ * debugger; a test then sees the state earlier tests left, e.g. a file-level
+ * random generator). */
+static void run_in_process(const int *order, int n, tally *t)
+{
+    for (int k = 0; k < n; k++) {
+        struct timespec t0;
+        clock_gettime(CLOCK_MONOTONIC, &t0);
+        int outcome = run_one(tests[order[k]].fn);
+        record(t, order[k], outcome, seconds_since(&t0));
+    }
+}
+
+/* Test I in a process of its own, its output to the file OUT. */
+static pid_t start_test(int i, const char *out)
+{
+    fflush(stdout);
+    fflush(stderr);
+    pid_t pid = fork();
+    if (pid != 0)
+        return pid;
+    int fd = open(out, O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    if (fd >= 0) {
+        dup2(fd, STDOUT_FILENO);
+        dup2(fd, STDERR_FILENO);
+        close(fd);
+    }
+    enter_test_tmpdir(i);
+    int outcome = run_one(tests[i].fn);
+    fflush(stdout);
+    fflush(stderr);
+    /* exit, not _exit: LeakSanitizer checks this test's leaks at exit and
+     * then exits with its own status, which the runner counts as a failure */
+    exit(outcome);
+}
+
+/* The outcome of a forked test from its wait status; anything but an exit
+ * with 0, 1 or 2 (a crash, a sanitizer's report) is a failure, said so. */
+static int outcome_of(int status)
+{
+    if (WIFEXITED(status) && WEXITSTATUS(status) <= 2)
+        return WEXITSTATUS(status);
+    if (WIFSIGNALED(status))
+        fprintf(stderr, "  FAIL: the test's process was killed by signal %d (%s)\n",
+                WTERMSIG(status), strsignal(WTERMSIG(status)));
+    else
+        fprintf(stderr, "  FAIL: the test's process exited with status %d (a sanitizer's report?)\n",
+                WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+    return 1;
+}
+
+static void copy_file_to_stderr(const char *path)
+{
+    size_t len;
+    unsigned char *text = harness_read_file(path, &len);
+    if (text) {
+        fwrite(text, 1, len, stderr);
+        free(text);
+    }
+    unlink(path);
+}
+
+/* The selected tests in ORDER, each in a forked process, JOBS at a time. A
+ * test's output is printed whole when it ends, then its verdict line. */
+static void run_forked(const int *order, int n, int jobs, tally *t)
+{
+    typedef struct slot {
+        pid_t pid;
+        int test;
+        struct timespec t0;
+    } slot;
+    slot slots[MAX_JOBS];
+    int running = 0, next = 0;
+    char out[400];
+    while (next < n || running > 0) {
+        while (running < jobs && next < n) {
+            int i = order[next++];
+            snprintf(out, sizeof out, "%s/out-%d.txt", tmp_root, i);
+            slot *s = &slots[running];
+            clock_gettime(CLOCK_MONOTONIC, &s->t0);
+            s->test = i;
+            s->pid = start_test(i, out);
+            if (s->pid < 0) {
+                fprintf(stderr, "  FAIL: cannot fork for %s: %s\n", tests[i].name, strerror(errno));
+                record(t, i, 1, 0.0);
+                continue;
+            }
+            running++;
+        }
+        if (running == 0)
+            continue;
+        int status;
+        pid_t pid = waitpid(-1, &status, 0);
+        if (pid < 0) {
+            if (errno == EINTR)
+                continue;
+            fprintf(stderr, "error: waitpid: %s\n", strerror(errno));
+            exit(1);
+        }
+        int k = 0;
+        while (k < running && slots[k].pid != pid)
+            k++;
+        if (k == running)
+            continue; /* not a test of ours */
+        slot done = slots[k];
+        slots[k] = slots[--running];
+        snprintf(out, sizeof out, "%s/out-%d.txt", tmp_root, done.test);
+        copy_file_to_stderr(out);
+        record(t, done.test, outcome_of(status), seconds_since(&done.t0));
+    }
+}
+
+/* The previous full run's time of each test, from FILE ("seconds name" per
+ * line), so that the longest start first and the run ends sooner. Tests not
+ * in it (new ones) count as long. */
+static void load_times(const char *path)
+{
+    for (int i = 0; i < ntests; i++)
+        tests[i].secs = 1e9;
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return;
+    char name[256];
+    double secs;
+    while (fscanf(f, "%lf %255s", &secs, name) == 2)
+        for (int i = 0; i < ntests; i++)
+            if (strcmp(tests[i].name, name) == 0)
+                tests[i].secs = secs;
+    fclose(f);
+}
+
+static void save_times(const char *path)
+{
+    FILE *f = fopen(path, "w");
+    if (!f)
+        return; /* only a hint for the next run's order */
+    for (int i = 0; i < ntests; i++)
+        fprintf(f, "%.3f %s\n", tests[i].secs, tests[i].name);
+    fclose(f);
+}
+
+static int by_time_desc(const void *a, const void *b)
+{
+    double x = tests[*(const int *)a].secs, y = tests[*(const int *)b].secs;
+    if (x != y)
+        return x < y ? 1 : -1;
+    return *(const int *)a - *(const int *)b;
+}
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: bspray_tests [--jobs N] [--in-process] [SUBSTRING]\n"
+               "Runs every test (or those whose name or file contains SUBSTRING), each in a\n"
+               "process of its own, N at a time (default: BSPRAY_TEST_JOBS, else the number of\n"
+               "online processors, at most %d). --in-process runs them one after another in\n"
+               "this process (for a debugger). Ends with \"N passed, N failed[, N skipped]\".\n",
+            MAX_JOBS);
+}
+
+/* N from TEXT when it is a whole number 1..MAX_JOBS, else 0. */
+static int parse_jobs(const char *text)
+{
+    char *end;
+    long v = text ? strtol(text, &end, 10) : 0;
+    return text && *text && !*end && v >= 1 && v <= MAX_JOBS ? (int)v : 0;
+}
+
 int main(int argc, char **argv)
 {
-    const char *filter = argc > 1 ? argv[1] : NULL;
-    int passed = 0, failed = 0, skipped = 0;
-    double total_secs = 0.0; /* the tests' own times, summed */
+    const char *filter = NULL, *jobs_text = getenv("BSPRAY_TEST_JOBS");
+    int in_process = 0;
+    for (int a = 1; a < argc; a++) {
+        if (strcmp(argv[a], "--jobs") == 0 || strcmp(argv[a], "-j") == 0) {
+            if (++a == argc) {
+                fprintf(stderr, "bspray_tests: %s needs a number\n", argv[a - 1]);
+                return 2;
+            }
+            jobs_text = argv[a];
+        } else if (strcmp(argv[a], "--in-process") == 0) {
+            in_process = 1;
+        } else if (strcmp(argv[a], "--help") == 0 || strcmp(argv[a], "-h") == 0) {
+            usage(stdout);
+            return 0;
+        } else if (argv[a][0] == '-' || filter) {
+            fprintf(stderr, "bspray_tests: unexpected argument '%s'\n", argv[a]);
+            usage(stderr);
+            return 2;
+        } else {
+            filter = argv[a];
+        }
+    }
+    int jobs;
+    if (jobs_text && *jobs_text) {
+        jobs = parse_jobs(jobs_text);
+        if (!jobs) {
+            fprintf(stderr, "bspray_tests: the number of jobs must be 1..%d, not '%s'\n", MAX_JOBS,
+                    jobs_text);
+            return 2;
+        }
+    } else {
+        long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+        jobs = cpus < 1 ? 1 : cpus > MAX_JOBS ? MAX_JOBS : (int)cpus;
+    }
+
     harness_tmpdir();
     atexit(remove_tmpdir);
     qsort(tests, (size_t)ntests, sizeof tests[0], cmp_tests);
-    for (int i = 0; i < ntests; i++) {
-        if (filter && !strstr(tests[i].name, filter) && !strstr(tests[i].file, filter))
-            continue;
-        struct timespec t0, t1;
-        clock_gettime(CLOCK_MONOTONIC, &t0);
-        int outcome = run_one(tests[i].fn);
-        clock_gettime(CLOCK_MONOTONIC, &t1);
-        double secs = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
-        total_secs += secs;
-        const char *verdict;
-        if (outcome == 1) {
-            failed++;
-            verdict = "FAIL";
-        } else if (outcome == 2) {
-            skipped++;
-            verdict = "skip";
-        } else {
-            passed++;
-            verdict = "ok  ";
-        }
-        fprintf(stderr, "%s %-48s %7.2fs  (%s)\n", verdict, tests[i].name, secs, tests[i].file);
+    /* the times file beside this program */
+    char times_path[4096];
+    const char *slash = strrchr(argv[0], '/');
+    snprintf(times_path, sizeof times_path, "%.*stest-times.txt",
+             slash ? (int)(slash - argv[0] + 1) : 0, argv[0]);
+    load_times(times_path);
+
+    static int order[MAX_TESTS];
+    int n = 0;
+    for (int i = 0; i < ntests; i++)
+        if (!filter || strstr(tests[i].name, filter) || strstr(tests[i].file, filter))
+            order[n++] = i;
+    tally t = {0};
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    if (in_process) {
+        run_in_process(order, n, &t);
+    } else {
+        qsort(order, (size_t)n, sizeof order[0], by_time_desc);
+        fprintf(stderr, "%d tests, %d at a time, each in a process of its own\n", n, jobs);
+        run_forked(order, n, jobs, &t);
     }
-    fprintf(stderr, "the tests took %.1fs in all\n", total_secs);
+    if (!filter)
+        save_times(times_path);
+    fprintf(stderr, "the tests took %.1fs in all, %.1fs from start to end\n", t.total_secs,
+            seconds_since(&t0));
+    if (t.failed)
+        fprintf(stderr, "failed: %s\n", t.failed_names);
     fflush(stderr);
-    if (skipped)
-        printf("%d passed, %d failed, %d skipped\n", passed, failed, skipped);
+    if (t.skipped)
+        printf("%d passed, %d failed, %d skipped\n", t.passed, t.failed, t.skipped);
     else
-        printf("%d passed, %d failed\n", passed, failed);
-    return failed ? 1 : 0;
+        printf("%d passed, %d failed\n", t.passed, t.failed);
+    return t.failed ? 1 : 0;
 }
