@@ -42,7 +42,7 @@ TEST(cli_bench_scaling_table_and_csv)
     REQUIRE(out);
     CHECK_EQ_INT(st, 0);
     CHECK_STR_CONTAINS(out, "| scene | accel | N | T_B 1t [s] | µs/prim | Mprim/s | first 1t [s] | "
-                            "T_B 2t [s] | speed-up | N_IN | N_V | N_OIV | cost | MB |");
+                            "T_B 2t wall [s] | speed-up | N_IN | N_V | N_OIV | cost | MB |");
     CHECK_STR_CONTAINS(out, "| spd:balls:2 | sah | ");
     CHECK_STR_CONTAINS(out, "| spd:balls:3 | sah | ");
     /* two sizes of one generator: the summary line */

@@ -106,7 +106,9 @@ static void print_help(void)
            "  first 1t [T_B_1t_first]  the first of the single-threaded builds, which\n"
            "                  writes memory the process may never have written: what one\n"
            "                  build in a fresh process costs, page faults included\n"
-           "  T_B Nt [T_B_nt] seconds of the best build on N threads, wall clock [threads: N]\n"
+           "  T_B Nt wall [T_B_nt]  seconds of the best build on N threads, wall clock\n"
+           "                  [threads: N]; with --threads 1, the wall time of the\n"
+           "                  single-threaded builds\n"
            "  speed-up        T_B Nt against the best single-threaded build's wall time\n"
            "                  [speedup]; kaplan builds on one thread whatever N\n"
            "  N_IN, N_V, N_OIV  interior nodes, leaves, primitive references in leaves\n"
@@ -184,7 +186,7 @@ static double speedup(const scaling_row *r)
 
 static void print_header(int threads)
 {
-    printf("| scene | accel | N | T_B 1t [s] | µs/prim | Mprim/s | first 1t [s] | T_B %dt [s] | "
+    printf("| scene | accel | N | T_B 1t [s] | µs/prim | Mprim/s | first 1t [s] | T_B %dt wall [s] | "
            "speed-up | N_IN | N_V | N_OIV | cost | MB |\n",
            threads);
     printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
@@ -412,7 +414,7 @@ int bench_scaling(int argc, char **argv)
     if (csv)
         csv_header(csv);
     printf("## Build-time scaling (T_B 1t: best single-threaded build, thread CPU time; "
-           "T_B %dt: wall clock)\n\n",
+           "T_B %dt wall: wall clock)\n\n",
            o.cl.threads);
     print_header(o.cl.threads);
     int nrows = 0, mismatch = 0;
