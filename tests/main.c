@@ -9,6 +9,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <setjmp.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -24,6 +25,9 @@
 
 #define MAX_TESTS 4096
 #define MAX_JOBS 16
+/* seconds a test may run before it is killed as hung (the slowest take about
+ * 100 s under the sanitizers on a loaded 2-core machine) */
+#define DEFAULT_TIMEOUT 900.0
 
 typedef struct test_entry {
     const char *name, *file;
@@ -271,6 +275,15 @@ static pid_t start_test(int i, const char *out)
     pid_t pid = fork();
     if (pid != 0)
         return pid;
+    setpgid(0, 0);
+    signal(SIGINT, SIG_DFL);
+    signal(SIGTERM, SIG_DFL);
+    signal(SIGHUP, SIG_DFL);
+    int in = open("/dev/null", O_RDONLY);
+    if (in >= 0) {
+        dup2(in, STDIN_FILENO);
+        close(in);
+    }
     int fd = open(out, O_WRONLY | O_CREAT | O_TRUNC, 0600);
     if (fd >= 0) {
         dup2(fd, STDOUT_FILENO);
@@ -312,37 +325,83 @@ static void copy_file_to_stderr(const char *path)
     unlink(path);
 }
 
-/* The selected tests in ORDER, each in a forked process, JOBS at a time. A
- * test's output is printed whole when it ends, then its verdict line. */
-static void run_forked(const int *order, int n, int jobs, tally *t)
+/* The forked tests running now: each the leader of a process group of its
+ * own, so that a hung test is ended with the commands it started, and an
+ * interrupted run ends them all. */
+typedef struct slot {
+    pid_t pid;
+    int test;
+    int killed; /* for running over its time */
+    struct timespec t0;
+} slot;
+static slot slots[MAX_JOBS];
+static int nrunning;
+static volatile sig_atomic_t interrupted; /* the signal that asked the run to end */
+
+static void note_interrupt(int sig)
 {
-    typedef struct slot {
-        pid_t pid;
-        int test;
-        struct timespec t0;
-    } slot;
-    slot slots[MAX_JOBS];
-    int running = 0, next = 0;
+    interrupted = sig;
+}
+
+/* After an interrupt: ends the running tests' groups, reaps them, removes
+ * the temporary tree, and dies of the same signal. */
+static void end_interrupted_run(void)
+{
+    for (int k = 0; k < nrunning; k++)
+        kill(-slots[k].pid, SIGKILL);
+    for (int k = 0; k < nrunning; k++)
+        waitpid(slots[k].pid, NULL, 0);
+    nrunning = 0;
+    remove_tmpdir();
+    int sig = interrupted;
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
+/* The selected tests in ORDER, each in a forked process, JOBS at a time. A
+ * test's output is printed whole when it ends, then its verdict line. A test
+ * still running after TIMEOUT seconds (0: no limit) is killed and fails. */
+static void run_forked(const int *order, int n, int jobs, double timeout, tally *t)
+{
+    signal(SIGINT, note_interrupt);
+    signal(SIGTERM, note_interrupt);
+    signal(SIGHUP, note_interrupt);
+    int next = 0;
     char out[400];
-    while (next < n || running > 0) {
-        while (running < jobs && next < n) {
+    while (next < n || nrunning > 0) {
+        if (interrupted)
+            end_interrupted_run();
+        while (nrunning < jobs && next < n) {
             int i = order[next++];
             snprintf(out, sizeof out, "%s/out-%d.txt", tmp_root, i);
-            slot *s = &slots[running];
+            slot *s = &slots[nrunning];
             clock_gettime(CLOCK_MONOTONIC, &s->t0);
             s->test = i;
+            s->killed = 0;
             s->pid = start_test(i, out);
             if (s->pid < 0) {
                 fprintf(stderr, "  FAIL: cannot fork for %s: %s\n", tests[i].name, strerror(errno));
                 record(t, i, 1, 0.0);
                 continue;
             }
-            running++;
+            setpgid(s->pid, s->pid); /* also in the child: whichever runs first */
+            nrunning++;
         }
-        if (running == 0)
+        if (nrunning == 0)
             continue;
         int status;
-        pid_t pid = waitpid(-1, &status, 0);
+        pid_t pid = waitpid(-1, &status, WNOHANG);
+        if (pid == 0) { /* none has ended: any over its time? */
+            for (int k = 0; k < nrunning; k++)
+                if (timeout > 0 && !slots[k].killed && seconds_since(&slots[k].t0) > timeout) {
+                    kill(-slots[k].pid, SIGKILL);
+                    slots[k].killed = 1;
+                    fprintf(stderr, "  FAIL: %s still running after %g s: killed (a hang?)\n",
+                            tests[slots[k].test].name, timeout);
+                }
+            nanosleep(&(struct timespec){0, 10 * 1000 * 1000}, NULL);
+            continue;
+        }
         if (pid < 0) {
             if (errno == EINTR)
                 continue;
@@ -350,12 +409,14 @@ static void run_forked(const int *order, int n, int jobs, tally *t)
             exit(1);
         }
         int k = 0;
-        while (k < running && slots[k].pid != pid)
+        while (k < nrunning && slots[k].pid != pid)
             k++;
-        if (k == running)
+        if (k == nrunning)
             continue; /* not a test of ours */
         slot done = slots[k];
-        slots[k] = slots[--running];
+        slots[k] = slots[nrunning - 1];
+        nrunning--;
+        kill(-done.pid, SIGKILL); /* anything the test left running in its group */
         snprintf(out, sizeof out, "%s/out-%d.txt", tmp_root, done.test);
         copy_file_to_stderr(out);
         record(t, done.test, outcome_of(status), seconds_since(&done.t0));
@@ -401,12 +462,14 @@ static int by_time_desc(const void *a, const void *b)
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: bspray_tests [--jobs N] [--in-process] [SUBSTRING]\n"
+    fprintf(f, "usage: bspray_tests [--jobs N] [--timeout S] [--in-process] [SUBSTRING]\n"
                "Runs every test (or those whose name or file contains SUBSTRING), each in a\n"
                "process of its own, N at a time (default: BSPRAY_TEST_JOBS, else the number of\n"
-               "online processors, at most %d). --in-process runs them one after another in\n"
-               "this process (for a debugger). Ends with \"N passed, N failed[, N skipped]\".\n",
-            MAX_JOBS);
+               "online processors, at most %d). A test still running after S seconds\n"
+               "(default: BSPRAY_TEST_TIMEOUT, else %.0f; 0: no limit) is killed and fails.\n"
+               "--in-process runs them one after another in this process (for a debugger;\n"
+               "no timeout). Ends with \"N passed, N failed[, N skipped]\".\n",
+            MAX_JOBS, DEFAULT_TIMEOUT);
 }
 
 /* N from TEXT when it is a whole number 1..MAX_JOBS, else 0. */
@@ -420,6 +483,7 @@ static int parse_jobs(const char *text)
 int main(int argc, char **argv)
 {
     const char *filter = NULL, *jobs_text = getenv("BSPRAY_TEST_JOBS");
+    const char *timeout_text = getenv("BSPRAY_TEST_TIMEOUT");
     int in_process = 0;
     for (int a = 1; a < argc; a++) {
         if (strcmp(argv[a], "--jobs") == 0 || strcmp(argv[a], "-j") == 0) {
@@ -428,6 +492,12 @@ int main(int argc, char **argv)
                 return 2;
             }
             jobs_text = argv[a];
+        } else if (strcmp(argv[a], "--timeout") == 0) {
+            if (++a == argc) {
+                fprintf(stderr, "bspray_tests: --timeout needs a number of seconds\n");
+                return 2;
+            }
+            timeout_text = argv[a];
         } else if (strcmp(argv[a], "--in-process") == 0) {
             in_process = 1;
         } else if (strcmp(argv[a], "--help") == 0 || strcmp(argv[a], "-h") == 0) {
@@ -454,6 +524,17 @@ int main(int argc, char **argv)
         jobs = cpus < 1 ? 1 : cpus > MAX_JOBS ? MAX_JOBS : (int)cpus;
     }
 
+    double timeout = DEFAULT_TIMEOUT;
+    if (timeout_text && *timeout_text) {
+        char *end;
+        timeout = strtod(timeout_text, &end);
+        if (*end || !(timeout >= 0.0 && timeout < 1e9)) {
+            fprintf(stderr, "bspray_tests: the timeout must be a number of seconds >= 0, not '%s'\n",
+                    timeout_text);
+            return 2;
+        }
+    }
+
     harness_tmpdir();
     atexit(remove_tmpdir);
     qsort(tests, (size_t)ntests, sizeof tests[0], cmp_tests);
@@ -477,7 +558,7 @@ int main(int argc, char **argv)
     } else {
         qsort(order, (size_t)n, sizeof order[0], by_time_desc);
         fprintf(stderr, "%d tests, %d at a time, each in a process of its own\n", n, jobs);
-        run_forked(order, n, jobs, &t);
+        run_forked(order, n, jobs, timeout, &t);
     }
     if (!filter)
         save_times(times_path);
