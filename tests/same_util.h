@@ -32,4 +32,16 @@ static inline int same_hit(int f1, const bsp_hit *a, int f2, const bsp_hit *b)
     return !f1 || (a->prim == b->prim && same_double(a->t, b->t));
 }
 
+/* Two materials: every number the same bits, the same flag (not memcmp of
+ * the structs, whose padding after the flag holds whatever the copy left). */
+static inline int same_material(const bsp_material *a, const bsp_material *b)
+{
+    for (int k = 0; k < 3; k++)
+        if (!same_double(a->color[k], b->color[k]))
+            return 0;
+    return same_double(a->kd, b->kd) && same_double(a->ks, b->ks) &&
+           same_double(a->shine, b->shine) && same_double(a->t, b->t) &&
+           same_double(a->ior, b->ior) && a->two_sided == b->two_sided;
+}
+
 #endif

@@ -93,12 +93,12 @@ static bsp_scene *shadow_scene(double floor_ks)
     REQUIRE(bsp_scene_set_camera(s, &c, &err) == BSP_OK);
     bsp_light l = {bsp_v3(0, 0, 8), {1, 1, 1}, 0};
     REQUIRE(bsp_scene_add_light(s, &l, &err) == BSP_OK);
-    bsp_material m = {{1, 1, 1}, 0.8, floor_ks, 10, 0, 1};
+    bsp_material m = {{1, 1, 1}, 0.8, floor_ks, 10, 0, 1, 0};
     REQUIRE(bsp_scene_set_material(s, &m, &err) == BSP_OK);
     bsp_vec3 q[4] = {bsp_v3(-50, -50, 0), bsp_v3(50, -50, 0), bsp_v3(50, 50, 0),
                      bsp_v3(-50, 50, 0)};
     REQUIRE(bsp_scene_add_polygon(s, q, 4, &err) == BSP_OK);
-    bsp_material m2 = {{1, 0, 0}, 0.8, 0, 10, 0, 1};
+    bsp_material m2 = {{1, 0, 0}, 0.8, 0, 10, 0, 1, 0};
     REQUIRE(bsp_scene_set_material(s, &m2, &err) == BSP_OK);
     REQUIRE(bsp_scene_add_sphere(s, bsp_v3(2.5, 0, 4), 1.0, &err) == BSP_OK);
     return s;
@@ -210,7 +210,7 @@ TEST(render_refraction_through_glass_sphere)
     bsp_error err;
     bsp_camera c = make_camera(bsp_v3(0, 0, 10), bsp_v3(0, 0, 0), bsp_v3(0, 1, 0), 20, 8);
     REQUIRE(bsp_scene_set_camera(s, &c, &err) == BSP_OK);
-    bsp_material glass = {{1, 1, 1}, 0.1, 0.1, 30, 0.9, 1.5};
+    bsp_material glass = {{1, 1, 1}, 0.1, 0.1, 30, 0.9, 1.5, 0};
     REQUIRE(bsp_scene_set_material(s, &glass, &err) == BSP_OK);
     REQUIRE(bsp_scene_add_sphere(s, bsp_v3(0, 0, 0), 1.0, &err) == BSP_OK);
     bsp_render_stats st;
@@ -346,5 +346,95 @@ TEST(render_pixel_orders_trace_in_their_documented_sequence)
     CHECK(img == NULL);
     CHECK(strstr(err.message, "pixel order 7") != NULL);
     bsp_accel_destroy(a);
+    bsp_scene_destroy(s);
+}
+
+/* Two 4 x 6 squares on z = 0 left and right of the axis, seen from above
+ * with the light at the eye: the left one wound to face the eye, the right
+ * one wound away from it, each the other's mirror image. */
+static const bsp_vec3 facing_square[4] = {{{-5, -3, 0}}, {{-1, -3, 0}}, {{-1, 3, 0}}, {{-5, 3, 0}}};
+static const bsp_vec3 turned_square[4] = {{{1, -3, 0}}, {{1, 3, 0}}, {{5, 3, 0}}, {{5, -3, 0}}};
+
+/* Renders S (33 x 33 rays from (0, 0, 10), 60 degrees) and checks what its
+ * material's two_sided flag promises: the mirrored pixels of the two squares
+ * equally bright and a shadow ray for every hit when two-sided, the away
+ * square darker and shadow rays only from the facing one when not. */
+static void check_two_squares(const bsp_scene *s, int two_sided)
+{
+    bsp_render_stats st;
+    bsp_image *img = render(s, 1, 0, &st);
+    REQUIRE(img->width == 33);
+    /* columns 16 -/+ 8: x = -/+ 8 * tan(30 deg) * 10 / 16 = -/+ 2.89, inside both */
+    double left = luminance(img, 8, 16), right = luminance(img, 24, 16);
+    uint64_t hits = st.cls[BSP_RAY_PRIMARY].hits;
+    CHECK(hits > 0 && hits % 2 == 0); /* the squares are mirror images */
+    CHECK_EQ_INT(st.cls[BSP_RAY_SHADOW].hits, 0); /* nothing between a square and the eye */
+    if (two_sided) {
+        CHECK_NEAR(left, right, 1e-6);
+        CHECK_EQ_INT(st.cls[BSP_RAY_SHADOW].rays, hits);
+    } else {
+        /* the away square gets the ambient term alone, the facing one also
+         * Lambert's (about its cosine 0.9 here times Kd 0.8, per channel) */
+        CHECK_MSG(right + 0.5 < left, "away square %g, facing square %g", right, left);
+        CHECK_EQ_INT(st.cls[BSP_RAY_SHADOW].rays, hits / 2);
+    }
+    bsp_image_destroy(img);
+}
+
+TEST(render_two_sided_material_lights_faces_wound_away)
+{
+    for (int two_sided = 0; two_sided <= 1; two_sided++) {
+        bsp_scene *s = bsp_scene_create();
+        REQUIRE(s);
+        bsp_error err;
+        bsp_camera c = make_camera(bsp_v3(0, 0, 10), bsp_v3(0, 0, 0), bsp_v3(0, 1, 0), 60, 32);
+        REQUIRE(bsp_scene_set_camera(s, &c, &err) == BSP_OK);
+        bsp_light l = {bsp_v3(0, 0, 10), {1, 1, 1}, 0};
+        REQUIRE(bsp_scene_add_light(s, &l, &err) == BSP_OK);
+        bsp_material m = {{1, 1, 1}, 0.8, 0, 10, 0, 1, two_sided};
+        REQUIRE(bsp_scene_set_material(s, &m, &err) == BSP_OK);
+        REQUIRE(bsp_scene_add_polygon(s, facing_square, 4, &err) == BSP_OK);
+        REQUIRE(bsp_scene_add_polygon(s, turned_square, 4, &err) == BSP_OK);
+        check_two_squares(s, two_sided);
+        bsp_scene_destroy(s);
+    }
+    /* a flag other than 0 or 1 is refused, naming the field */
+    bsp_scene *s = bsp_scene_create();
+    REQUIRE(s);
+    bsp_error err;
+    bsp_material bad = {{1, 1, 1}, 0.8, 0, 10, 0, 1, 2};
+    CHECK_EQ_INT(bsp_scene_set_material(s, &bad, &err), BSP_ERR_INVALID);
+    CHECK_STR_CONTAINS(err.message, "two_sided");
+    bsp_scene_destroy(s);
+}
+
+TEST(render_mesh_default_material_is_two_sided)
+{
+    /* the same squares as an OBJ file: the mesh's default material lights
+     * the square wound away like the facing one */
+    char path[512];
+    harness_tmp_path(path, sizeof path, "two_squares.obj");
+    FILE *f = fopen(path, "w");
+    REQUIRE(f);
+    for (int k = 0; k < 4; k++)
+        fprintf(f, "v %g %g %g\n", facing_square[k].x, facing_square[k].y, facing_square[k].z);
+    for (int k = 0; k < 4; k++)
+        fprintf(f, "v %g %g %g\n", turned_square[k].x, turned_square[k].y, turned_square[k].z);
+    fprintf(f, "f 1 2 3 4\nf 5 6 7 8\n");
+    fclose(f);
+    bsp_scene *s = NULL;
+    bsp_error err;
+    REQUIRE_MSG(bsp_scene_load(path, &s, &err) == BSP_OK, "%s", err.message);
+    REQUIRE(bsp_scene_material_count(s) == 1);
+    CHECK_EQ_INT(bsp_scene_material(s, 0)->two_sided, 1);
+    /* the view of the test above; the mesh's light moves with its eye */
+    bsp_vec3 eye = bsp_v3(0, 0, 10), at = bsp_v3(0, 0, 0), up = bsp_v3(0, 1, 0);
+    REQUIRE(bsp_scene_set_default_view(s, &eye, &at, &up, 60, &err) == BSP_OK);
+    bsp_camera c = *bsp_scene_camera(s);
+    c.res_x = c.res_y = 32;
+    REQUIRE(bsp_scene_set_camera(s, &c, &err) == BSP_OK);
+    REQUIRE(bsp_scene_light_count(s) == 1);
+    CHECK(bsp_scene_light(s, 0)->pos.z == 10);
+    check_two_squares(s, 1);
     bsp_scene_destroy(s);
 }

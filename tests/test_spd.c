@@ -18,6 +18,7 @@
 
 #include "bspray/scene.h"
 #include "harness.h"
+#include "same_util.h"
 #include "spd/spd.h"
 
 /* --- comparing NFF texts ------------------------------------------------------- */
@@ -525,8 +526,7 @@ TEST(spd_generated_scene_equals_parsed_reference_file)
         CHECK_EQ_INT(bsp_scene_material_count(f), bsp_scene_material_count(g));
         for (size_t m = 0; m < bsp_scene_material_count(f) && m < bsp_scene_material_count(g);
              m++)
-            CHECK(memcmp(bsp_scene_material(f, m), bsp_scene_material(g, m),
-                         sizeof(bsp_material)) == 0);
+            CHECK(same_material(bsp_scene_material(f, m), bsp_scene_material(g, m)));
         /* the same t, bit for bit, for rays from the eye through every primitive */
         const bsp_camera *cam = bsp_scene_camera(f);
         for (size_t p = 0; p < n && cam; p += 1 + n / 500) {
@@ -1294,8 +1294,7 @@ TEST(spd_tessellated_text_equals_generated_scene)
         CHECK_EQ_INT(bsp_scene_material_count(f), bsp_scene_material_count(g));
         for (size_t m = 0; m < bsp_scene_material_count(f) && m < bsp_scene_material_count(g);
              m++)
-            CHECK(memcmp(bsp_scene_material(f, m), bsp_scene_material(g, m),
-                         sizeof(bsp_material)) == 0);
+            CHECK(same_material(bsp_scene_material(f, m), bsp_scene_material(g, m)));
         const bsp_camera *cam = bsp_scene_camera(f);
         size_t rays = 0;
         for (size_t p = 0; p < n && cam; p += 1 + n / 400) {

@@ -548,13 +548,15 @@ static int cmd_stats(int argc, char **argv)
             printf(" colour %g %g %g", l->color[0], l->color[1], l->color[2]);
         printf("\n");
     }
-    size_t nm = bsp_scene_material_count(scene), refl = 0, transm = 0;
+    size_t nm = bsp_scene_material_count(scene), refl = 0, transm = 0, two_sided = 0;
     for (size_t i = 0; i < nm; i++) {
         const bsp_material *m = bsp_scene_material(scene, i);
         refl += m->ks > 0;
         transm += m->t > 0;
+        two_sided += m->two_sided != 0;
     }
-    printf("materials: %zu (%zu with Ks > 0, %zu with T > 0)\n", nm, refl, transm);
+    printf("materials: %zu (%zu with Ks > 0, %zu with T > 0, %zu lit on the side seen)\n", nm,
+           refl, transm, two_sided);
     double bg[3];
     bsp_scene_background(scene, bg);
     printf("background: %g %g %g\n", bg[0], bg[1], bg[2]);

@@ -42,7 +42,7 @@ typedef struct bsp_camera {
     int res_x, res_y; /* resolution in pixels, > 0 */
 } bsp_camera;
 
-/* An NFF f record. */
+/* An NFF f record, and how its surfaces take light. */
 typedef struct bsp_material {
     double color[3]; /* RGB in [0,1] */
     double kd;       /* diffuse weight */
@@ -50,6 +50,11 @@ typedef struct bsp_material {
     double shine;    /* Phong exponent */
     double t;        /* transmittance; > 0 spawns refraction rays, two-sided */
     double ior;      /* index of refraction, used only when t > 0 */
+    int two_sided;   /* 0 (NFF, the SPD's rule): lights count only on the
+                        surface's own front (a polygon's winding normal, a
+                        sphere's outside); 1: on whichever side the viewer
+                        sees (a mesh's default material: meshes are often
+                        wound inconsistently). No other value. */
 } bsp_material;
 
 /* An NFF l record: a positional point light. */

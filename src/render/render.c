@@ -8,7 +8,10 @@
  *     dot(N, L) > 0 with N the outward normal (spheres, cones) or the winding
  *     normal (polygons, patches), not turned toward the viewer. A ray that
  *     hits a glass sphere from inside therefore casts shadow rays only to
- *     lights outside that wall;
+ *     lights outside that wall. A two-sided material (a mesh's default:
+ *     bsp_material.two_sided) takes its lights on the side the viewer sees
+ *     instead, so that a face wound the other way round is lit like its
+ *     neighbours;
  *   - a surface with Ks > 0 or T > 0 spawns a reflected ray (the SPD Readme:
  *     every transmitter also reflects), one with T > 0 a refracted ray, none
  *     on total internal reflection;
@@ -155,6 +158,9 @@ static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, 
 
     /* ng is the surface's own front; shading uses normals turned to the viewer */
     bsp_vec3 front = ng;
+    /* the side whose lights count: the front (the SPD rule), or for a
+     * two-sided material the side the viewer sees (ng once turned, below) */
+    bsp_vec3 lit_side = front;
     int entering = v3_dot(ng, d) < 0.0;
     if (!entering) {
         ng = v3_neg(ng);
@@ -162,6 +168,8 @@ static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, 
     }
     if (v3_dot(ns, d) > 0.0) /* interpolated normal facing away: use the true one */
         ns = ng;
+    if (m->two_sided)
+        lit_side = ng;
 
     double I = job->light_intensity;
     for (int c = 0; c < 3; c++)
@@ -171,8 +179,8 @@ static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, 
     for (size_t l = 0; l < bsp_scene_light_count(s); l++) {
         const bsp_light *light = bsp_scene_light(s, l);
         bsp_vec3 L = v3_sub(light->pos, p);
-        if (v3_dot(front, L) <= 0.0)
-            continue; /* light behind the surface's front: no shadow ray (SPD rule) */
+        if (v3_dot(lit_side, L) <= 0.0)
+            continue; /* light behind the lit side: no shadow ray (SPD rule) */
         if (shadowed(w, p, origin_prim(s, hit->prim, front, L), light->pos))
             continue;
         L = v3_normalize(L);

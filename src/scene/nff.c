@@ -508,7 +508,7 @@ static bsp_status read_record(parser *P, const token *k)
     case KW_F: {
         if ((st = read_numbers(P, "'f' record", k->line, 8, x, 8)) != BSP_OK)
             return st;
-        bsp_material m = {{x[0], x[1], x[2]}, x[3], x[4], x[5], x[6], x[7]};
+        bsp_material m = {{x[0], x[1], x[2]}, x[3], x[4], x[5], x[6], x[7], 0};
         note_range(P, RANGE_COLOUR, fmax(x[0], fmax(x[1], x[2])), k->line);
         note_range(P, RANGE_KD_KS, fmax(x[3], x[4]), k->line);
         note_range(P, RANGE_T, x[6], k->line);

@@ -363,7 +363,7 @@ bsp_status mesh_load_file(mesh_parse_fn parse, const char *path, bsp_scene **out
 }
 
 /* White, mostly diffuse, with a little specular highlight. */
-static const bsp_material mesh_material = {{1.0, 1.0, 1.0}, 0.8, 0.1, 30.0, 0.0, 1.0};
+static const bsp_material mesh_material = {{1.0, 1.0, 1.0}, 0.8, 0.1, 30.0, 0.0, 1.0, 1};
 
 bsp_scene *mesh_scene_create(void)
 {

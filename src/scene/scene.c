@@ -41,7 +41,7 @@ static int grow(void **p, size_t *cap, size_t need, size_t elem)
 
 #define GROW(arr, cap, need) grow((void **)&(arr), &(cap), (need), sizeof *(arr))
 
-static const bsp_material default_material = {{1.0, 1.0, 1.0}, 1.0, 0.0, 0.0, 0.0, 1.0};
+static const bsp_material default_material = {{1.0, 1.0, 1.0}, 1.0, 0.0, 0.0, 0.0, 1.0, 0};
 
 bsp_scene *bsp_scene_create(void)
 {
@@ -369,6 +369,9 @@ bsp_status bsp_scene_set_material(bsp_scene *s, const bsp_material *m, bsp_error
     if (m->kd < 0 || m->ks < 0 || m->t < 0 || m->shine < 0)
         return scene_fail(s, err, BSP_ERR_INVALID,
                           "material: Kd, Ks, Shine and T must not be negative");
+    if (m->two_sided != 0 && m->two_sided != 1)
+        return scene_fail(s, err, BSP_ERR_INVALID, "material: two_sided must be 0 or 1, not %d",
+                          m->two_sided);
     if (m->t > 0 && m->ior <= 0)
         return scene_fail(s, err, BSP_ERR_INVALID,
                           "material: transmittance %g needs a positive index of refraction, "

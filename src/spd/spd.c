@@ -250,6 +250,7 @@ static void sc_material(spd_sink *s, const double rgb[3], double kd, double ks, 
     m.shine = round_g6(shine);
     m.t = round_g6(t);
     m.ior = round_g6(ior);
+    m.two_sided = 0;
     scene_check(s, bsp_scene_set_material(c->scene, &m, c->err));
 }
 

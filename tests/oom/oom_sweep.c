@@ -258,7 +258,7 @@ static bsp_status make_scene_in_code(bsp_scene *s, bsp_error *err)
             uint32_t d = c + 1, *q = &idx[6 * t];
             q[0] = a, q[1] = b, q[2] = d, q[3] = a, q[4] = d, q[5] = c;
         }
-    const bsp_material m = {{0.8, 0.2, 0.1}, 0.7, 0.3, 20.0, 0.0, 1.0};
+    const bsp_material m = {{0.8, 0.2, 0.1}, 0.7, 0.3, 20.0, 0.0, 1.0, 0};
     const bsp_light l = {bsp_v3(5, 5, 20), {1, 1, 1}, 0};
     const bsp_camera cam = {bsp_v3(5, -10, 8), bsp_v3(5, 5, 0), bsp_v3(0, 0, 1), 45.0, 0.01, 32, 32};
     const bsp_vec3 poly[4] = {bsp_v3(-1, -1, -1), bsp_v3(12, -1, -1), bsp_v3(12, 12, -1),
