@@ -84,15 +84,24 @@ TEST(camera_up_need_not_be_perpendicular)
 
 /* A floor square at z = 0, a sphere above it, one light overhead, the camera
  * looking down. */
-static bsp_scene *shadow_scene(double floor_ks)
+/* A new scene seen from (0, 0, 10) looking down at the origin (60 degrees,
+ * 33 x 33 rays), with one white light at LIGHT. */
+static bsp_scene *scene_from_above(bsp_vec3 light)
 {
     bsp_scene *s = bsp_scene_create();
     REQUIRE(s);
     bsp_error err;
     bsp_camera c = make_camera(bsp_v3(0, 0, 10), bsp_v3(0, 0, 0), bsp_v3(0, 1, 0), 60, 32);
     REQUIRE(bsp_scene_set_camera(s, &c, &err) == BSP_OK);
-    bsp_light l = {bsp_v3(0, 0, 8), {1, 1, 1}, 0};
+    bsp_light l = {light, {1, 1, 1}, 0};
     REQUIRE(bsp_scene_add_light(s, &l, &err) == BSP_OK);
+    return s;
+}
+
+static bsp_scene *shadow_scene(double floor_ks)
+{
+    bsp_scene *s = scene_from_above(bsp_v3(0, 0, 8));
+    bsp_error err;
     bsp_material m = {{1, 1, 1}, 0.8, floor_ks, 10, 0, 1, 0};
     REQUIRE(bsp_scene_set_material(s, &m, &err) == BSP_OK);
     bsp_vec3 q[4] = {bsp_v3(-50, -50, 0), bsp_v3(50, -50, 0), bsp_v3(50, 50, 0),
@@ -384,13 +393,8 @@ static void check_two_squares(const bsp_scene *s, int two_sided)
 TEST(render_two_sided_material_lights_faces_wound_away)
 {
     for (int two_sided = 0; two_sided <= 1; two_sided++) {
-        bsp_scene *s = bsp_scene_create();
-        REQUIRE(s);
+        bsp_scene *s = scene_from_above(bsp_v3(0, 0, 10)); /* the light at the eye */
         bsp_error err;
-        bsp_camera c = make_camera(bsp_v3(0, 0, 10), bsp_v3(0, 0, 0), bsp_v3(0, 1, 0), 60, 32);
-        REQUIRE(bsp_scene_set_camera(s, &c, &err) == BSP_OK);
-        bsp_light l = {bsp_v3(0, 0, 10), {1, 1, 1}, 0};
-        REQUIRE(bsp_scene_add_light(s, &l, &err) == BSP_OK);
         bsp_material m = {{1, 1, 1}, 0.8, 0, 10, 0, 1, two_sided};
         REQUIRE(bsp_scene_set_material(s, &m, &err) == BSP_OK);
         REQUIRE(bsp_scene_add_polygon(s, facing_square, 4, &err) == BSP_OK);
