@@ -2,7 +2,10 @@
  * harness.h — a tiny test harness. Each tests/test_*.c file defines tests with
  * TEST(name) { ... }; they register themselves before main (a constructor), so
  * adding a file is all it takes. CHECK* macros record a failure and go on;
- * REQUIRE* macros end the current test. The runner (tests/main.c) prints one
+ * REQUIRE* macros end the current test. The runner (tests/main.c) runs each
+ * test in a forked process of its own, several at once, so a test starts
+ * from the program's initial state, shares nothing with the others, and
+ * writes its files under harness_tmpdir() (its own directory). It prints one
  * line per failed check and ends with "N passed, N failed[, N skipped]".
  */
 #ifndef BSPRAY_TESTS_HARNESS_H
@@ -74,7 +77,8 @@ static inline double harness_xorshift_unit(uint64_t *s)
 {
     return (double)(harness_xorshift64(s) >> 11) * (1.0 / 9007199254740992.0);
 }
-/* A fresh temporary directory for this run (created on first use). */
+/* A fresh temporary directory for this test (created on first use; the
+ * runner removes the whole tree at the end). */
 const char *harness_tmpdir(void);
 /* Everything F has left, NUL-terminated (malloc'd), or NULL when out of
  * memory. */
@@ -82,7 +86,7 @@ char *harness_read_all(FILE *f);
 /* The whole file PATH (malloc'd, NUL-terminated after its *LEN bytes), or
  * NULL when it cannot be opened or read. */
 unsigned char *harness_read_file(const char *path, size_t *len);
-/* BUF: the path of NAME in this run's temporary directory. */
+/* BUF: the path of NAME in this test's temporary directory. */
 void harness_tmp_path(char *buf, size_t size, const char *name);
 /* Runs CMD through the shell; returns its standard output (malloc'd, NUL
  * terminated; NULL when it cannot run) and sets *STATUS to its exit status
