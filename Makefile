@@ -55,7 +55,7 @@ LIB   := $(BUILD)/libbspray.a
 # The shared library: position-independent copies of the library's objects,
 # exporting only the public API (the bsp_* functions of include/bspray/,
 # src/libbspray.map). While the version is 0.x the ABI may change with the
-# minor version, so the soname carries both: libbspray.so.0.1.
+# minor version, so the soname carries both: libbspray.so.0.2.
 VERSION := $(shell sed -n 's/^\#define BSPRAY_VERSION_STRING "\(.*\)"/\1/p' include/bspray/bspray.h)
 SONAME  := libbspray.so.$(basename $(VERSION))
 SHLIB   := $(BUILD)/libbspray.so.$(VERSION)

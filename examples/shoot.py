@@ -10,7 +10,7 @@ bit: the rays are made by the same operations in the same order.
     python3 shoot.py [LIBRARY [SCENE [G]]]
 
 LIBRARY: the shared library (default: build/libbspray.so, beside the
-examples/ folder; installed: libbspray.so.0.1). SCENE: default spd:balls.
+examples/ folder; installed: libbspray.so.0.2). SCENE: default spd:balls.
 G: default 256.
 """
 import ctypes

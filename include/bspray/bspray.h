@@ -12,9 +12,9 @@
 #define BSPRAY_BSPRAY_H
 
 #define BSPRAY_VERSION_MAJOR 0
-#define BSPRAY_VERSION_MINOR 1
+#define BSPRAY_VERSION_MINOR 2
 #define BSPRAY_VERSION_PATCH 0
-#define BSPRAY_VERSION_STRING "0.1.0"
+#define BSPRAY_VERSION_STRING "0.2.0"
 
 #include "bspray/error.h"
 #include "bspray/geom.h"
