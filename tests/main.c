@@ -309,7 +309,8 @@ static int outcome_of(int status)
         fprintf(stderr, "  FAIL: the test's process was killed by signal %d (%s)\n",
                 WTERMSIG(status), strsignal(WTERMSIG(status)));
     else
-        fprintf(stderr, "  FAIL: the test's process exited with status %d (a sanitizer's report?)\n",
+        fprintf(stderr,
+                "  FAIL: the test's process exited with status %d (a sanitizer's report?)\n",
                 WIFEXITED(status) ? WEXITSTATUS(status) : -1);
     return 1;
 }
@@ -529,7 +530,8 @@ int main(int argc, char **argv)
         char *end;
         timeout = strtod(timeout_text, &end);
         if (*end || !(timeout >= 0.0 && timeout < 1e9)) {
-            fprintf(stderr, "bspray_tests: the timeout must be a number of seconds >= 0, not '%s'\n",
+            fprintf(stderr,
+                    "bspray_tests: the timeout must be a number of seconds >= 0, not '%s'\n",
                     timeout_text);
             return 2;
         }

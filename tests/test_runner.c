@@ -58,7 +58,8 @@ TEST(runner_isolates_crashes_and_hangs)
     /* the crash and the hang fail with their reasons, the passing fixture
      * still runs and passes, and its output comes before its verdict */
     CHECK_RUN(cmd, 1, "fixture_crash: about to crash", "killed by signal 6",
-              "fixture_hang still running after 1 s: killed", "fixture_pass: ran\nok   fixture_pass",
+              "fixture_hang still running after 1 s: killed",
+              "fixture_pass: ran\nok   fixture_pass",
               "failed: ", "1 passed, 2 failed");
     /* the same with the fixtures one after another */
     snprintf(cmd, sizeof cmd,
