@@ -863,6 +863,42 @@ TEST(polygon_shading_normal_mean_value)
                  bsp_v3(0, 0, 1)));
 }
 
+TEST(polygon_shading_normal_continuous_at_edges)
+{
+    /* Within rounding of an edge the coordinates' weights blow up; the
+     * normal must still be the edge's linear blend of its ends' normals, not
+     * the flat face normal (which r nr + dot cancelling to 0 used to give
+     * within about 5e-9 of an edge of this square). */
+    bsp_vec3 pool[5] = {bsp_v3(5, 5, 5), bsp_v3(0, 0, 1), bsp_v3(1, 0, 1), bsp_v3(0, 1, 1),
+                        bsp_v3(-1, -1, 2)};
+    polygon_shape p;
+    REQUIRE(polygon_setup(&p, square_verts, 0, 4, 1));
+    const double gaps[] = {1e-6, 1e-9, 1e-12, 1e-15, 1e-300, 0.0};
+    int checked = 0;
+    for (int e = 0; e < 4; e++) {
+        bsp_vec3 a = square_verts[e], b = square_verts[(e + 1) % 4];
+        bsp_vec3 inward = bsp_v3(1.0 - 0.5 * (a.x + b.x), 1.0 - 0.5 * (a.y + b.y), 0.0);
+        for (int k = 1; k < 64; k++) {
+            double s = k / 64.0;
+            bsp_vec3 on = v3_add(v3_scale(a, 1.0 - s), v3_scale(b, s)); /* exact: 1/64ths */
+            bsp_vec3 want = v3_normalize(v3_add(v3_scale(pool[1 + e], 1.0 - s),
+                                                v3_scale(pool[1 + (e + 1) % 4], s)));
+            for (size_t g = 0; g < sizeof gaps / sizeof gaps[0]; g++) {
+                bsp_vec3 q = v3_madd(on, inward, gaps[g]);
+                if (gaps[g] == 0.0) { /* the next double inside */
+                    q.x = nextafter(on.x, on.x + inward.x);
+                    q.y = nextafter(on.y, on.y + inward.y);
+                }
+                bsp_vec3 n = polygon_shading_normal(&p, square_verts, pool, q);
+                CHECK_MSG(vec_near(n, want, 1e-5), "edge %d at %g, %g inside: (%g, %g, %g)", e,
+                          s, gaps[g], n.x, n.y, n.z);
+                checked++;
+            }
+        }
+    }
+    CHECK_EQ_INT(checked, 4 * 63 * 6);
+}
+
 TEST(polygon_shading_normal_concave_and_linear)
 {
     /* mean value coordinates reproduce linear functions: vertex normals that

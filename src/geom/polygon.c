@@ -88,13 +88,32 @@ static bsp_vec3 unit_or(bsp_vec3 n, bsp_vec3 fallback)
     return v3_is_finite(u) && v3_dot(u, u) > 0.0 ? u : fallback;
 }
 
+/* tan(a/2) for the signed angle a between two vectors of lengths R and NR,
+ * their cross and dot products DET and DOT: sin a / (1 + cos a) while the
+ * angle is at most a right one, (1 - cos a) / sin a beyond. The first form
+ * alone divides, near an edge (a close to pi), by r nr + dot, which cancels
+ * to nothing: it rounded to 0 within about 5e-9 of the edge of a unit square,
+ * and the normal there fell back to the flat one. Not finite only where the
+ * point lies on the edge to rounding (det 0 or tiny, dot < 0). */
+static double half_angle_tan(double det, double dot, double r, double nr)
+{
+    return dot >= 0.0 ? det / (r * nr + dot) : (r * nr - dot) / det;
+}
+
+/* The normal on the edge from vertex I (normal NI, at distance RI) to vertex
+ * J (NJ, RJ): the linear blend of its ends, the coordinates' limit there. */
+static bsp_vec3 edge_normal(bsp_vec3 ni, double ri, bsp_vec3 nj, double rj, bsp_vec3 fallback)
+{
+    return unit_or(v3_add(v3_scale(ni, rj), v3_scale(nj, ri)), fallback);
+}
+
 /*
  * Mean value coordinates (Floater; Hormann & Floater's signed-angle form for
  * arbitrary polygons): w_i = (tan(a_{i-1}/2) + tan(a_i/2)) / r_i, where r_i is
  * the distance to vertex i and a_i the signed angle subtended by edge
- * (i, i+1), tan(a/2) = det / (r_i r_{i+1} + dot). On a vertex the result is
- * that vertex's normal; on an edge it is the linear blend of its endpoints
- * (the limit of the coordinates there).
+ * (i, i+1) (half_angle_tan). On a vertex the result is that vertex's normal;
+ * on an edge, or within rounding of one, it is the linear blend of its
+ * endpoints (the limit of the coordinates there).
  */
 bsp_vec3 polygon_shading_normal(const polygon_shape *p, const bsp_vec3 *verts,
                                 const bsp_vec3 *normal_pool, bsp_vec3 p_hit)
@@ -110,9 +129,11 @@ bsp_vec3 polygon_shading_normal(const polygon_shape *p, const bsp_vec3 *verts,
     double lx = vs[n - 1].v[au] - px, ly = vs[n - 1].v[av] - py;
     double sx = vs[0].v[au] - px, sy = vs[0].v[av] - py;
     double lr = hypot(lx, ly), r = hypot(sx, sy);
-    /* Only the unusable cases make this NaN, and the loop returns early on
-     * exactly those (vertex n-1 or edge (n-1, 0)) before the sum is used. */
-    double tan_prev = (lx * sy - ly * sx) / (lr * r + (lx * sx + ly * sy));
+    if (lr == 0.0)
+        return unit_or(ns[n - 1], p->normal);
+    double tan_prev = half_angle_tan(lx * sy - ly * sx, lx * sx + ly * sy, lr, r);
+    if (r != 0.0 && !isfinite(tan_prev)) /* on the edge (n-1, 0) */
+        return edge_normal(ns[n - 1], lr, ns[0], r, p->normal);
 
     bsp_vec3 acc = bsp_v3(0.0, 0.0, 0.0);
     double wsum = 0.0;
@@ -122,10 +143,11 @@ bsp_vec3 polygon_shading_normal(const polygon_shape *p, const bsp_vec3 *verts,
         double nr = hypot(nx, ny);
         if (r == 0.0)
             return unit_or(ns[i], p->normal);
-        double det = sx * ny - sy * nx, dot = sx * nx + sy * ny;
-        if (det == 0.0 && dot < 0.0)
-            return unit_or(v3_add(v3_scale(ns[i], nr), v3_scale(ns[j], r)), p->normal);
-        double tan_i = det / (r * nr + dot);
+        if (nr == 0.0)
+            return unit_or(ns[j], p->normal);
+        double tan_i = half_angle_tan(sx * ny - sy * nx, sx * nx + sy * ny, r, nr);
+        if (!isfinite(tan_i)) /* on the edge (i, j) */
+            return edge_normal(ns[i], r, ns[j], nr, p->normal);
         double w = (tan_prev + tan_i) / r;
         acc = v3_madd(acc, ns[i], w);
         wsum += w;
