@@ -267,6 +267,22 @@ static void run_in_process(const int *order, int n, tally *t)
     }
 }
 
+/* The signals that end a run: the runner catches them to end its tests
+ * first (run_forked); a test's process keeps their defaults. */
+static const int stop_signals[] = {SIGINT, SIGTERM, SIGHUP};
+
+static void set_stop_handler(void (*handler)(int))
+{
+    for (size_t k = 0; k < sizeof stop_signals / sizeof *stop_signals; k++)
+        signal(stop_signals[k], handler);
+}
+
+/* BUF: the file that holds test I's output until it ends. */
+static void output_path(char *buf, size_t size, int i)
+{
+    snprintf(buf, size, "%s/out-%d.txt", tmp_root, i);
+}
+
 /* Test I in a process of its own, its output to the file OUT. */
 static pid_t start_test(int i, const char *out)
 {
@@ -276,9 +292,7 @@ static pid_t start_test(int i, const char *out)
     if (pid != 0)
         return pid;
     setpgid(0, 0);
-    signal(SIGINT, SIG_DFL);
-    signal(SIGTERM, SIG_DFL);
-    signal(SIGHUP, SIG_DFL);
+    set_stop_handler(SIG_DFL);
     int in = open("/dev/null", O_RDONLY);
     if (in >= 0) {
         dup2(in, STDIN_FILENO);
@@ -364,9 +378,7 @@ static void end_interrupted_run(void)
  * still running after TIMEOUT seconds (0: no limit) is killed and fails. */
 static void run_forked(const int *order, int n, int jobs, double timeout, tally *t)
 {
-    signal(SIGINT, note_interrupt);
-    signal(SIGTERM, note_interrupt);
-    signal(SIGHUP, note_interrupt);
+    set_stop_handler(note_interrupt);
     int next = 0;
     char out[400];
     while (next < n || nrunning > 0) {
@@ -374,7 +386,7 @@ static void run_forked(const int *order, int n, int jobs, double timeout, tally 
             end_interrupted_run();
         while (nrunning < jobs && next < n) {
             int i = order[next++];
-            snprintf(out, sizeof out, "%s/out-%d.txt", tmp_root, i);
+            output_path(out, sizeof out, i);
             slot *s = &slots[nrunning];
             clock_gettime(CLOCK_MONOTONIC, &s->t0);
             s->test = i;
@@ -418,7 +430,7 @@ static void run_forked(const int *order, int n, int jobs, double timeout, tally 
         slots[k] = slots[nrunning - 1];
         nrunning--;
         kill(-done.pid, SIGKILL); /* anything the test left running in its group */
-        snprintf(out, sizeof out, "%s/out-%d.txt", tmp_root, done.test);
+        output_path(out, sizeof out, done.test);
         copy_file_to_stderr(out);
         record(t, done.test, outcome_of(status), seconds_since(&done.t0));
     }

@@ -129,10 +129,10 @@ bsp_vec3 polygon_shading_normal(const polygon_shape *p, const bsp_vec3 *verts,
     double lx = vs[n - 1].v[au] - px, ly = vs[n - 1].v[av] - py;
     double sx = vs[0].v[au] - px, sy = vs[0].v[av] - py;
     double lr = hypot(lx, ly), r = hypot(sx, sy);
-    if (lr == 0.0)
-        return unit_or(ns[n - 1], p->normal);
     double tan_prev = half_angle_tan(lx * sy - ly * sx, lx * sx + ly * sy, lr, r);
-    if (r != 0.0 && !isfinite(tan_prev)) /* on the edge (n-1, 0) */
+    /* on the edge (n-1, 0), or on vertex n-1 (the blend is then its normal);
+     * on vertex 0 the loop's first step answers */
+    if (r != 0.0 && !isfinite(tan_prev))
         return edge_normal(ns[n - 1], lr, ns[0], r, p->normal);
 
     bsp_vec3 acc = bsp_v3(0.0, 0.0, 0.0);
@@ -143,10 +143,8 @@ bsp_vec3 polygon_shading_normal(const polygon_shape *p, const bsp_vec3 *verts,
         double nr = hypot(nx, ny);
         if (r == 0.0)
             return unit_or(ns[i], p->normal);
-        if (nr == 0.0)
-            return unit_or(ns[j], p->normal);
         double tan_i = half_angle_tan(sx * ny - sy * nx, sx * nx + sy * ny, r, nr);
-        if (!isfinite(tan_i)) /* on the edge (i, j) */
+        if (!isfinite(tan_i)) /* on the edge (i, j), or on vertex j */
             return edge_normal(ns[i], r, ns[j], nr, p->normal);
         double w = (tan_prev + tan_i) / r;
         acc = v3_madd(acc, ns[i], w);

@@ -158,9 +158,6 @@ static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, 
 
     /* ng is the surface's own front; shading uses normals turned to the viewer */
     bsp_vec3 front = ng;
-    /* the side whose lights count: the front (the SPD rule), or for a
-     * two-sided material the side the viewer sees (ng once turned, below) */
-    bsp_vec3 lit_side = front;
     int entering = v3_dot(ng, d) < 0.0;
     if (!entering) {
         ng = v3_neg(ng);
@@ -168,8 +165,9 @@ static void shade(worker *w, const bsp_ray *ray, const bsp_hit *hit, int depth, 
     }
     if (v3_dot(ns, d) > 0.0) /* interpolated normal facing away: use the true one */
         ns = ng;
-    if (m->two_sided)
-        lit_side = ng;
+    /* the side whose lights count: the front (the SPD rule), or for a
+     * two-sided material the side the viewer sees */
+    const bsp_vec3 lit_side = m->two_sided ? ng : front;
 
     double I = job->light_intensity;
     for (int c = 0; c < 3; c++)
