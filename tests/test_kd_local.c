@@ -21,9 +21,10 @@ static int same_as_scene(const bsp_scene *s, const kd_local *L, uint32_t p)
     switch ((shape_kind)r->shape) {
     case SHAPE_TRIANGLE: {
         const triangle_shape *tr = &s->triangles[r->slot];
+        const bsp_vec3 e1 = v3_sub(tr->v1, tr->v0), e2 = v3_sub(tr->v2, tr->v0);
         return memcmp(&L->u.triangle.v0, &tr->v0, sizeof tr->v0) == 0 &&
-               memcmp(&L->u.triangle.e1, &tr->e1, sizeof tr->e1) == 0 &&
-               memcmp(&L->u.triangle.e2, &tr->e2, sizeof tr->e2) == 0;
+               memcmp(&L->u.triangle.e1, &e1, sizeof e1) == 0 &&
+               memcmp(&L->u.triangle.e2, &e2, sizeof e2) == 0 && L->edge_exp == tr->edge_exp;
     }
     case SHAPE_SPHERE: {
         const sphere_shape *sp = &s->spheres[r->slot];

@@ -73,11 +73,11 @@ static bsp_vec3 boundary_point(const bsp_scene *s, uint32_t p, bsp_vec3 o, unsig
     double x = harness_rnd(rng);
     switch ((shape_kind)r->shape) {
     case SHAPE_TRIANGLE: {
-        const triangle_edges *t = &s->triangles[r->slot].edges;
+        const triangle_edges t = triangle_edges_of(&s->triangles[r->slot].verts);
         static const double ab[7][2] = {{0, 0}, {1, 0}, {0, 1}, {0.5, 0}, {0, 0.5}, {0.5, 0.5},
                                         {0.25, 0.75}};
         const double *w = ab[(int)(x * 7)];
-        return v3_add(t->v0, v3_add(v3_scale(t->e1, w[0]), v3_scale(t->e2, w[1])));
+        return v3_add(t.v0, v3_add(v3_scale(t.e1, w[0]), v3_scale(t.e2, w[1])));
     }
     case SHAPE_SPHERE: {
         const sphere_shape *sp = &s->spheres[r->slot];

@@ -271,7 +271,11 @@ TEST(triangle_setup_and_degenerate)
 {
     triangle_shape tr = unit_triangle();
     CHECK(vec_eq(tr.normal, bsp_v3(0, 0, 1)));
-    CHECK(vec_eq(tr.e1, bsp_v3(1, 0, 0)) && vec_eq(tr.e2, bsp_v3(0, 1, 0)));
+    CHECK(vec_eq(tr.v0, bsp_v3(0, 0, 0)) && vec_eq(tr.v1, bsp_v3(1, 0, 0)) &&
+          vec_eq(tr.v2, bsp_v3(0, 1, 0)));
+    /* |e1|_1 + |e2|_1 = 2: the least power of two above it is 4 */
+    CHECK_EQ_INT(tr.edge_exp, 2);
+    CHECK(triangle_edge_norm(tr.edge_exp) == 4.0);
     CHECK(tr.normals == SHAPE_NO_NORMALS);
     /* reversed winding flips the normal */
     REQUIRE(triangle_setup(&tr, bsp_v3(0, 0, 0), bsp_v3(0, 1, 0), bsp_v3(1, 0, 0), 7));

@@ -547,7 +547,7 @@ int kd_clip_prim_bounded(const bsp_scene *scene, uint32_t prim, bsp_box pb, cons
             break;
         case SHAPE_TRIANGLE: {
             const triangle_shape *tr = &scene->triangles[p->slot];
-            bsp_vec3 vs[3] = {tr->v0, v3_add(tr->v0, tr->e1), v3_add(tr->v0, tr->e2)};
+            bsp_vec3 vs[3] = {tr->v0, tr->v1, tr->v2};
             r = clip_triangle(vs, pb, &g, &b);
             break;
         }
@@ -680,7 +680,7 @@ int kd_clip_prim_split(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
         if (box_is_empty(pb) || !box_meets(&pb, &g))
             return 0;
         const triangle_shape *tr = &scene->triangles[p->slot];
-        bsp_vec3 vs[3] = {tr->v0, v3_add(tr->v0, tr->e1), v3_add(tr->v0, tr->e2)};
+        bsp_vec3 vs[3] = {tr->v0, tr->v1, tr->v2};
         return clip_triangle_split(vs, pb, &g, axis, s, pad, out);
     }
     int got = 0;
@@ -743,8 +743,8 @@ static int part_afresh(const bsp_scene *scene, uint32_t prim, bsp_box pb, const 
     if ((shape_kind)p->shape == SHAPE_TRIANGLE) {
         const triangle_shape *tr = &scene->triangles[p->slot];
         vs[0] = tr->v0;
-        vs[1] = v3_add(tr->v0, tr->e1);
-        vs[2] = v3_add(tr->v0, tr->e2);
+        vs[1] = tr->v1;
+        vs[2] = tr->v2;
         /* the part and both sides of it: a plane at most doubles a polygon */
         if (!path_reserve(path, 5 * TRI_CLIP_MAX + 6))
             return -1;

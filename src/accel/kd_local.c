@@ -16,7 +16,8 @@ void kd_local_fill(kd_local *L, const bsp_scene *s, uint32_t p)
     L->shape = r->shape;
     switch ((shape_kind)r->shape) {
     case SHAPE_TRIANGLE:
-        L->u.triangle = s->triangles[r->slot].edges;
+        L->u.triangle = triangle_edges_of(&s->triangles[r->slot].verts);
+        L->edge_exp = s->triangles[r->slot].edge_exp;
         break;
     case SHAPE_SPHERE:
         L->u.sphere = s->spheres[r->slot];
@@ -86,8 +87,11 @@ static int local_matches(const kd_local *L, const bsp_scene *s)
     if (L->shape != r->shape)
         return 0;
     switch ((shape_kind)r->shape) {
-    case SHAPE_TRIANGLE: /* nine doubles, no padding */
-        return memcmp(&L->u.triangle, &s->triangles[r->slot].edges, sizeof(triangle_edges)) == 0;
+    case SHAPE_TRIANGLE: { /* nine doubles, no padding */
+        const triangle_shape *tr = &s->triangles[r->slot];
+        const triangle_edges e = triangle_edges_of(&tr->verts);
+        return memcmp(&L->u.triangle, &e, sizeof e) == 0 && L->edge_exp == tr->edge_exp;
+    }
     case SHAPE_SPHERE: {
         const sphere_shape *a = &L->u.sphere, *b = &s->spheres[r->slot];
         return memcmp(&a->center, &b->center, sizeof a->center) == 0 &&

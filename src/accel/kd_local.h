@@ -28,13 +28,14 @@
 
 typedef struct kd_local {
     union {
-        triangle_edges triangle;
+        triangle_edges triangle; /* triangle_edges_of the scene's vertices */
         sphere_shape sphere;
         polygon_shape polygon; /* its vertices and slabs stay in the scene's pools */
         const cone_shape *cone;
     } u;
-    uint32_t prim; /* the scene's index */
-    uint8_t shape; /* shape_kind of the primitive */
+    uint32_t prim;   /* the scene's index */
+    uint8_t shape;   /* shape_kind of the primitive */
+    int8_t edge_exp; /* a triangle's triangle_edge_exp (its shape's), else 0 */
 } kd_local;
 
 _Static_assert(sizeof(kd_local) == 80, "a local record is 80 bytes");
@@ -62,7 +63,7 @@ kd_local_isect(const bsp_scene *s, const kd_local *L, const isect_ray *ray, doub
                scene_isect_hit *h)
 {
     const void *data = L->shape == SHAPE_CONE ? (const void *)L->u.cone : (const void *)&L->u;
-    return shape_isect(s, L->shape, data, ray, tmax, h);
+    return shape_isect(s, L->shape, data, L->prim, L->edge_exp, ray, tmax, h);
 }
 
 #endif /* BSPRAY_ACCEL_KD_LOCAL_H */

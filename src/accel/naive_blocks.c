@@ -60,18 +60,32 @@ static inline nv2 negate_where(nm2 m, nv2 x)
     return select2(m, -x, x);
 }
 
+/* |X|: the sign bit cleared, as fabs does. */
+static inline nv2 abs2(nv2 x)
+{
+    typedef int64_t bits2 __attribute__((vector_size(16)));
+    bits2 bits;
+    memcpy(&bits, &x, sizeof bits);
+    bits &= (bits2){INT64_MAX, INT64_MAX};
+    nv2 out;
+    memcpy(&out, &bits, sizeof out);
+    return out;
+}
+
 /* The kernels' first tests (geom/isect_first.h) on two lanes at a time. */
 #define ISECT_T nv2
 #define ISECT_MASK nm2
 #define ISECT_FIRST(name) name##_v2
 #define ISECT_NEG_WHERE(m, x) negate_where((m), (x))
 #define ISECT_ZERO splat(0.0)
+#define ISECT_ABS(x) abs2(x)
 #include "geom/isect_first.h"
 #undef ISECT_T
 #undef ISECT_MASK
 #undef ISECT_FIRST
 #undef ISECT_NEG_WHERE
 #undef ISECT_ZERO
+#undef ISECT_ABS
 
 /* One scan's state: the closest hit so far (ANY: the first hit found). */
 typedef struct scan {
@@ -85,7 +99,7 @@ typedef struct scan {
 
 /* The ray, broadcast. */
 typedef struct ray2 {
-    nv2 ox, oy, oz, dx, dy, dz, dd;
+    nv2 ox, oy, oz, dx, dy, dz, dd, edge_scale;
 } ray2;
 
 /* sphere_isect's first test on lanes H * 2 and H * 2 + 1. */
@@ -124,20 +138,23 @@ static inline unsigned cone_pass(const naive_cone_block *b, int h, const ray2 *r
     return mask_bits((qa == splat(0.0)) | (disc >= splat(0.0)));
 }
 
-/* triangle_solve's first test (the direct solution): the barycentric range.
- * A miss there is the kernel's miss (its careful path runs only after a
- * direct hit fails the hit check). */
+/* triangle_solve's first test (the direct solution): the barycentric range
+ * widened by the margin. A miss there is the kernel's miss (its careful path
+ * runs only after a direct hit fails the hit check). */
 static inline unsigned triangle_pass(const naive_triangle_block *b, int h, const ray2 *r,
                                      const scan *sc)
 {
     (void)sc;
+    const nv2 tx = r->ox - lanes(b->vx, h), ty = r->oy - lanes(b->vy, h),
+              tz = r->oz - lanes(b->vz, h);
+    const nv2 e1x = lanes(b->e1x, h), e1y = lanes(b->e1y, h), e1z = lanes(b->e1z, h);
+    const nv2 e2x = lanes(b->e2x, h), e2y = lanes(b->e2y, h), e2z = lanes(b->e2z, h);
     nv2 det, bu, bv, qx, qy, qz;
-    triangle_bary_v2(r->dx, r->dy, r->dz, r->ox - lanes(b->vx, h), r->oy - lanes(b->vy, h),
-                     r->oz - lanes(b->vz, h), lanes(b->e1x, h), lanes(b->e1y, h),
-                     lanes(b->e1z, h), lanes(b->e2x, h), lanes(b->e2y, h), lanes(b->e2z, h), &det,
-                     &bu, &bv, &qx, &qy, &qz);
+    triangle_bary_v2(r->dx, r->dy, r->dz, tx, ty, tz, e1x, e1y, e1z, e2x, e2y, e2z, &det, &bu, &bv,
+                     &qx, &qy, &qz);
+    nv2 m = triangle_margin_v2(tx, ty, tz, lanes(b->enorm, h), r->edge_scale);
     nm2 neg;
-    return mask_bits(triangle_range_v2(&det, &bu, &bv, &neg));
+    return mask_bits(triangle_range_v2(&det, &bu, &bv, m, &neg));
 }
 
 /* polygon_isect's first test: the plane met at t in [tmin, tmax], tmax the
@@ -205,7 +222,7 @@ static inline __attribute__((always_inline)) int scan_all(const naive_blocks *b,
 {
     const isect_ray *r = sc->r;
     const ray2 rv = {splat(r->org.x), splat(r->org.y), splat(r->org.z), splat(r->dir.x),
-                     splat(r->dir.y), splat(r->dir.z), splat(r->dd)};
+                     splat(r->dir.y), splat(r->dir.z), splat(r->dd), splat(r->edge_scale)};
     size_t base = 0;
     SCAN_SHAPE(b->spheres, b->nsphere_blocks, b->nspheres, sphere_pass);
     SCAN_SHAPE(b->cones, b->ncone_blocks, b->ncones, cone_pass);
@@ -398,11 +415,13 @@ bsp_status naive_blocks_build(const bsp_scene *s, naive_blocks **out, bsp_error 
             break;
         }
         case SHAPE_TRIANGLE: {
-            const triangle_edges *t = &s->triangles[p->slot].edges;
+            const triangle_shape *tr = &s->triangles[p->slot];
+            const triangle_edges t = triangle_edges_of(&tr->verts);
             naive_triangle_block *blk = &b->triangles[j / NAIVE_LANES];
-            put3(blk->vx, blk->vy, blk->vz, l, t->v0);
-            put3(blk->e1x, blk->e1y, blk->e1z, l, t->e1);
-            put3(blk->e2x, blk->e2y, blk->e2z, l, t->e2);
+            put3(blk->vx, blk->vy, blk->vz, l, t.v0);
+            put3(blk->e1x, blk->e1y, blk->e1z, l, t.e1);
+            put3(blk->e2x, blk->e2y, blk->e2z, l, t.e2);
+            blk->enorm[l] = triangle_edge_norm(tr->edge_exp);
             blk->prim[l] = (uint32_t)i;
             break;
         }

@@ -41,6 +41,7 @@ typedef struct isect_ray {
     double dd;   /* dot(dir, dir) */
     double tmin; /* accepted t: tmin <= t <= tmax (closed) */
     double tol;  /* the hit check's distance (above); INFINITY: no check */
+    double edge_scale; /* 2^-40 |dir|_1: the triangle's margin (triangle_margin) */
 } isect_ray;
 
 /* The hit check's distance relative to the scene scale (scene_internal.h):
@@ -57,6 +58,7 @@ static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray, double tol)
     r->dd = v3_dot(ray->dir, ray->dir);
     r->tmin = ray->tmin;
     r->tol = tol;
+    r->edge_scale = 0x1p-40 * ((fabs(ray->dir.x) + fabs(ray->dir.y)) + fabs(ray->dir.z));
 }
 
 /* The first tests of the sphere, cone, triangle and polygon kernels, for doubles
@@ -66,12 +68,14 @@ static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray, double tol)
 #define ISECT_FIRST(name) name
 #define ISECT_NEG_WHERE(m, x) ((m) ? -(x) : (x))
 #define ISECT_ZERO 0.0
+#define ISECT_ABS(x) fabs(x)
 #include "geom/isect_first.h"
 #undef ISECT_T
 #undef ISECT_MASK
 #undef ISECT_FIRST
 #undef ISECT_NEG_WHERE
 #undef ISECT_ZERO
+#undef ISECT_ABS
 
 /* The roots t0 <= t1 of a t^2 + 2 b t + c = 0 given disc = b^2 - a c >= 0
  * (a != 0), by the stable formula: q = -(b + sign(b) sqrt(disc)), the roots
@@ -139,35 +143,110 @@ ISECT_INLINE int sphere_isect(const sphere_shape *s, const isect_ray *ray, doubl
     return 0;
 }
 
-/* --- triangle (Möller–Trumbore; see triangle.c) --------------------------- */
+/* --- triangle (Möller–Trumbore, watertight near edges; see triangle.c) ---- */
 
-/* Möller–Trumbore for the ray from ORG (the ray's origin, or a point of it
- * TS further on, SHIFTED) to the triangle, as triangle_isect describes;
- * returns 1 on a hit, 0 on a miss, and -1 when a hit fails only the hit
- * check.
+/* The side of the 2-D point Q from the line through the origin and P, as the
+ * sign of px qy - py qx, exactly. The rounded difference of the two rounded
+ * products has the exact sign or is 0 (rounding is monotonic: px qy > py qx
+ * gives fl(px qy) >= fl(py qx)); at 0, Kahan's form with fused multiply-adds
+ * decides (the exact value, rounded once). Swapping P and Q negates the
+ * result bit for bit. */
+static inline double edge_side(double px, double py, double qx, double qy)
+{
+    double r = px * qy - py * qx;
+    if (r != 0.0)
+        return r;
+    double w = py * qx;
+    double err = fma(-py, qx, w); /* w - py qx, exactly */
+    return fma(px, qy, -w) + err;
+}
+
+/* Woop, Benthin and Wald's watertight test ("Watertight ray/triangle
+ * intersection", JCGT 2013): whether the ray's line passes through the
+ * triangle, decided on the vertices moved into the ray's frame (the origin
+ * subtracted, then sheared along the direction onto the plane across its
+ * largest component). Every vertex gets the same coordinates in every
+ * triangle that shares it, each edge's side is edge_side of its two ends
+ * (so the triangle on the other side of a shared edge computes the same
+ * value negated), and the signs are exact: of two triangles sharing an edge,
+ * any line through it passes inside at least one, whatever their windings.
+ * Both faces count: inside when the three sides agree in sign (zeros
+ * agreeing with either); all three 0, a line in the triangle's plane,
+ * misses. Not inlined: taken only near an edge (triangle_solve). */
+static __attribute__((noinline, unused)) int triangle_watertight(const triangle_verts *tr,
+                                                                 const isect_ray *ray)
+{
+    const double *d = ray->dir.v, *o = ray->org.v;
+    const double ax = fabs(d[0]), ay = fabs(d[1]), az = fabs(d[2]);
+    const int kz = ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2);
+    const int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
+    const double sx = d[kx] / d[kz], sy = d[ky] / d[kz];
+    const bsp_vec3 *v[3] = {&tr->v0, &tr->v1, &tr->v2};
+    double x[3], y[3];
+    for (int i = 0; i < 3; i++) {
+        double h = v[i]->v[kz] - o[kz];
+        x[i] = (v[i]->v[kx] - o[kx]) - sx * h;
+        y[i] = (v[i]->v[ky] - o[ky]) - sy * h;
+    }
+    const double s0 = edge_side(x[1], y[1], x[2], y[2]); /* the edge v1 v2 */
+    const double s1 = edge_side(x[2], y[2], x[0], y[0]); /* v2 v0 */
+    const double s2 = edge_side(x[0], y[0], x[1], y[1]); /* v0 v1 */
+    const int pos = s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0;
+    const int neg = s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0;
+    return (pos || neg) && !(s0 == 0.0 && s1 == 0.0 && s2 == 0.0);
+}
+
+/* What triangle_isect returns when the watertight test must decide. */
+#define TRIANGLE_NEAR_EDGE 2
+
+/* How triangle_solve decides inside or outside: by the margin, returning
+ * TRIANGLE_NEAR_EDGE within it (DIRECT); or not at all, the caller having
+ * decided (DECIDED: the ray's origin; SHIFTED: a point of the ray TS
+ * further on, the careful path). */
+enum { TRIANGLE_DIRECT, TRIANGLE_DECIDED, TRIANGLE_SHIFTED };
+
+/* Möller–Trumbore for the ray from ORG to the triangle, as triangle_isect
+ * describes; returns 1 on a hit, 0 on a miss, TRIANGLE_NEAR_EDGE (DIRECT
+ * only), and -1 when a hit fails only the hit check.
  *
- * Branch-free up to the one test of the barycentric range: u, v and the
- * unnormalised t are always computed, the determinant's sign folded in by
- * selects, and the five range conditions combined with & into one branch.
- * Whether a ray passes a triangle's u or v edge is the kind of branch no
- * predictor can learn; testing u first saved a cross product on a miss but
- * cost a misprediction on about every other test. Same values, so the same
- * bits: primary rays per second +15 % on the Stanford dragon (202,520
- * triangles), +0-10 % on teapot:60 (docs/kdtree-log.md, "Session 22"). */
-ISECT_INLINE int triangle_solve(const triangle_edges *tr, const isect_ray *ray, bsp_vec3 org,
-                                double ts, const int shifted, double tmax, double *t,
+ * Inside or outside: where the unnormalised barycentrics bu, bv and
+ * det - (bu + bv) are all past the margin (triangle_margin) inside, a hit;
+ * any one past it outside, a miss; otherwise (the ray passes within
+ * rounding of an edge) the watertight test decides, so that a closed mesh
+ * lets no ray through between its faces. The margin is far above either
+ * test's rounding, so both agree wherever Möller–Trumbore decides alone,
+ * and the answer is the watertight test's on every ray. t is
+ * Möller–Trumbore's either way.
+ *
+ * Branch-free up to the test of the margin: u, v and the unnormalised t are
+ * always computed, the determinant's sign folded in by selects, and the
+ * range conditions combined with & into one branch. Whether a ray passes a
+ * triangle's u or v edge is the kind of branch no predictor can learn;
+ * testing u first saved a cross product on a miss but cost a misprediction
+ * on about every other test. Same values, so the same bits: primary rays
+ * per second +15 % on the Stanford dragon (202,520 triangles), +0-10 % on
+ * teapot:60 (docs/kdtree-log.md, "Session 22"). */
+ISECT_INLINE int triangle_solve(const triangle_edges *tr, double enorm, const isect_ray *ray,
+                                bsp_vec3 org, double ts, const int mode, double tmax, double *t,
                                 double *bu_out, double *bv_out, double *det_out)
 {
-    bsp_vec3 d = ray->dir, tvec = v3_sub(org, tr->v0), qvec;
+    const bsp_vec3 d = ray->dir, tvec = v3_sub(org, tr->v0), e1 = tr->e1, e2 = tr->e2;
+    bsp_vec3 qvec;
     double det, bu, bv;
-    triangle_bary(d.x, d.y, d.z, tvec.x, tvec.y, tvec.z, tr->e1.x, tr->e1.y, tr->e1.z, tr->e2.x,
-                  tr->e2.y, tr->e2.z, &det, &bu, &bv, &qvec.x, &qvec.y, &qvec.z);
-    double bt = v3_dot(tr->e2, qvec);
+    triangle_bary(d.x, d.y, d.z, tvec.x, tvec.y, tvec.z, e1.x, e1.y, e1.z, e2.x, e2.y, e2.z, &det,
+                  &bu, &bv, &qvec.x, &qvec.y, &qvec.z);
+    double bt = v3_dot(e2, qvec);
+    /* decided already: no margin, only det != 0 */
+    const double m = mode != TRIANGLE_DIRECT
+                         ? INFINITY
+                         : triangle_margin(tvec.x, tvec.y, tvec.z, enorm, ray->edge_scale);
     int neg;
-    const int in_range = triangle_range(&det, &bu, &bv, &neg);
+    const int maybe = triangle_range(&det, &bu, &bv, m, &neg);
     bt = neg ? -bt : bt;
-    if (!in_range)
+    if (!maybe)
         return 0;
+    if (mode == TRIANGLE_DIRECT && !(bu >= m && bv >= m && det - (bu + bv) >= m))
+        return TRIANGLE_NEAR_EDGE;
     /* The hit check, before the interval: whether the careful path runs
      * must not depend on tmin/tmax, or a closest-hit loop (whose tmax
      * follows the best hit) would see another t than a loop with another
@@ -180,11 +259,11 @@ ISECT_INLINE int triangle_solve(const triangle_edges *tr, const isect_ray *ray, 
      * take no check.) */
     const double lim = det * ray->tol;
     for (int k = 0; k < 3; k++) {
-        double res = det * tvec.v[k] + bt * ray->dir.v[k] - bu * tr->e1.v[k] - bv * tr->e2.v[k];
+        double res = det * tvec.v[k] + bt * ray->dir.v[k] - bu * e1.v[k] - bv * e2.v[k];
         if (fabs(res) > lim)
             return -1;
     }
-    double tt = shifted ? ts + bt / det : bt / det;
+    double tt = mode == TRIANGLE_SHIFTED ? ts + bt / det : bt / det;
     if (!(tt >= ray->tmin && tt <= tmax))
         return 0;
     *t = tt;
@@ -200,8 +279,9 @@ ISECT_INLINE int triangle_solve(const triangle_edges *tr, const isect_ray *ray, 
  * far away (10^3 scene scales and more) the direct solution's point errs by
  * 1e-16 |o - v0| / sine (the sine of the angle at v0) and a thin triangle's
  * real hit fails the check; from the near point it passes. A phantom fails
- * here too: its determinant is noise whatever the origin. Not inlined: taken
- * only after a failed check. */
+ * here too: its determinant is noise whatever the origin. Inside or outside
+ * was decided on the direct solution. Not inlined: taken only after a
+ * failed check. */
 static __attribute__((noinline, unused)) int triangle_isect_near(const triangle_edges *tr,
                                                                  const isect_ray *ray, double tmax,
                                                                  double *t, double *bu_out,
@@ -209,17 +289,37 @@ static __attribute__((noinline, unused)) int triangle_isect_near(const triangle_
 {
     double ts = v3_dot(v3_sub(tr->v0, ray->org), ray->dir) / ray->dd;
     bsp_vec3 org = v3_madd(ray->org, ray->dir, ts);
-    return triangle_solve(tr, ray, org, ts, 1, tmax, t, bu_out, bv_out, det_out) == 1;
+    return triangle_solve(tr, 0.0, ray, org, ts, TRIANGLE_SHIFTED, tmax, t, bu_out, bv_out,
+                          det_out) == 1;
 }
 
-/* On a hit also writes the unnormalised barycentrics and the (positive)
+/* The triangle with the edges' size ENORM (triangle_edge_norm): 1 on a hit,
+ * 0 on a miss, and TRIANGLE_NEAR_EDGE when the ray passes within the margin
+ * of an edge: then the caller decides by triangle_watertight on the
+ * triangle's vertices and, if inside, finishes with triangle_isect_decided.
+ * On a hit also writes the unnormalised barycentrics and the (positive)
  * determinant: u = *bu / *det, v = *bv / *det, computed only for the final
  * hit by triangle_uv. */
-ISECT_INLINE int triangle_isect(const triangle_edges *tr, const isect_ray *ray, double tmax,
-                                double *t, double *bu_out, double *bv_out, double *det_out)
+ISECT_INLINE int triangle_isect(const triangle_edges *tr, double enorm, const isect_ray *ray,
+                                double tmax, double *t, double *bu_out, double *bv_out,
+                                double *det_out)
 {
-    int r = triangle_solve(tr, ray, ray->org, 0.0, 0, tmax, t, bu_out, bv_out, det_out);
+    int r = triangle_solve(tr, enorm, ray, ray->org, 0.0, TRIANGLE_DIRECT, tmax, t, bu_out,
+                           bv_out, det_out);
     if (__builtin_expect(r < 0, 0))
+        return triangle_isect_near(tr, ray, tmax, t, bu_out, bv_out, det_out);
+    return r;
+}
+
+/* triangle_isect for a ray the watertight test has put inside. Not inlined:
+ * taken only near an edge. */
+static __attribute__((noinline, unused)) int
+triangle_isect_decided(const triangle_edges *tr, const isect_ray *ray, double tmax, double *t,
+                       double *bu_out, double *bv_out, double *det_out)
+{
+    int r = triangle_solve(tr, 0.0, ray, ray->org, 0.0, TRIANGLE_DECIDED, tmax, t, bu_out,
+                           bv_out, det_out);
+    if (r < 0)
         return triangle_isect_near(tr, ray, tmax, t, bu_out, bv_out, det_out);
     return r;
 }

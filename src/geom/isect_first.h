@@ -13,13 +13,14 @@
  *   ISECT_FIRST(name)   the name of a function for this type
  *   ISECT_NEG_WHERE(m, x)  -x where mask m is set, x elsewhere
  *   ISECT_ZERO          zero of type ISECT_T
+ *   ISECT_ABS(x)        |x| (the sign bit cleared, exact)
  * and undefines them afterwards. Every function is static inline and always
  * inlined; the outputs by pointer vanish after inlining.
  */
 
 #if !defined(ISECT_T) || !defined(ISECT_MASK) || !defined(ISECT_FIRST) ||                      \
-    !defined(ISECT_NEG_WHERE) || !defined(ISECT_ZERO)
-#error "isect_first.h needs ISECT_T, ISECT_MASK, ISECT_FIRST, ISECT_NEG_WHERE and ISECT_ZERO"
+    !defined(ISECT_NEG_WHERE) || !defined(ISECT_ZERO) || !defined(ISECT_ABS)
+#error "isect_first.h needs ISECT_T, ISECT_MASK, ISECT_FIRST, ISECT_NEG_WHERE, ISECT_ZERO, ISECT_ABS"
 #endif
 
 /* The sphere's discriminant (sphere_isect): for the origin OC = org - centre
@@ -109,19 +110,36 @@ ISECT_FIRST(triangle_bary)(ISECT_T dx, ISECT_T dy, ISECT_T dz, ISECT_T tx, ISECT
     *bv = dx * *qx + dy * *qy + dz * *qz;
 }
 
+/* The margin past which Möller–Trumbore's own signs decide (triangle_solve):
+ * SCALE (T E) for the origin's offset TV = org - v0, with E = 2^k >
+ * |e1|_1 + |e2|_1 (ENORM, triangle_edge_norm), T = |tv|_1 + E and
+ * SCALE = 2^-40 |d|_1 (isect_ray.edge_scale). For a ray passing within the
+ * triangle's size of it, det, bu, bv and det - (bu + bv), and the watertight
+ * test's edge functions brought to the same scale, err by less than
+ * 2^-47 |d| T E (docs/precision.md): a value past the margin has the sign
+ * exact arithmetic gives it, in both tests. */
+static inline __attribute__((always_inline)) ISECT_T
+ISECT_FIRST(triangle_margin)(ISECT_T tx, ISECT_T ty, ISECT_T tz, ISECT_T enorm, ISECT_T scale)
+{
+    ISECT_T tn = (ISECT_ABS(tx) + ISECT_ABS(ty) + ISECT_ABS(tz)) + enorm;
+    return scale * (tn * enorm);
+}
+
 /* The sign of DET folded into *DET, *BU and *BV (made the positive
- * determinant's), NEG the mask of where it was negative; returns the
- * barycentric range test: det != 0, bu >= 0, bv >= 0, bu + bv <= det. A
- * miss where it fails. */
+ * determinant's), NEG the mask of where it was negative; returns where the
+ * ray may pass inside: det != 0 and none of bu, bv and det - (bu + bv)
+ * below -M, the margin (all three at least -M: with M = 0, the barycentric
+ * range). A miss where it fails; past the margin inside, a hit; between,
+ * the watertight test decides (triangle_solve). NaN fails. */
 static inline __attribute__((always_inline)) ISECT_MASK
-ISECT_FIRST(triangle_range)(ISECT_T *det, ISECT_T *bu, ISECT_T *bv, ISECT_MASK *neg)
+ISECT_FIRST(triangle_range)(ISECT_T *det, ISECT_T *bu, ISECT_T *bv, ISECT_T m, ISECT_MASK *neg)
 {
     *neg = *det < ISECT_ZERO;
     *det = ISECT_NEG_WHERE(*neg, *det);
     *bu = ISECT_NEG_WHERE(*neg, *bu);
     *bv = ISECT_NEG_WHERE(*neg, *bv);
-    return (*det != ISECT_ZERO) & (*bu >= ISECT_ZERO) & (*bu <= *det) & (*bv >= ISECT_ZERO) &
-           (*bu + *bv <= *det);
+    ISECT_T lo = -m;
+    return (*det != ISECT_ZERO) & (*bu >= lo) & (*bv >= lo) & (*det - (*bu + *bv) >= lo);
 }
 
 /* The polygon's plane (polygon_isect): DENOM = n . d (in *DENOM; a miss when

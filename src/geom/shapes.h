@@ -24,8 +24,10 @@
 #ifndef BSPRAY_GEOM_SHAPES_H
 #define BSPRAY_GEOM_SHAPES_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "bspray/geom.h"
 
@@ -50,24 +52,69 @@ typedef struct sphere_shape {
     int inside_only; /* NFF negative radius: only the inside is visible */
 } sphere_shape;
 
-/* What the triangle kernel reads (geom/isect.h): the kd-tree's leaf-ordered
- * copy of the primitives (accel/kd_local.h) holds this part alone. */
+/* A triangle's vertices: what the scene keeps, and what the watertight
+ * decision (geom/isect.h) reads, since it needs each vertex as every
+ * triangle sharing it has it (v0 + (v1 - v0) does not give v1 back in
+ * floating point). */
+typedef struct triangle_verts {
+    bsp_vec3 v0, v1, v2;
+} triangle_verts;
+
+/* What Möller–Trumbore reads (geom/isect.h): the first vertex and the edges
+ * e1 = v1 - v0, e2 = v2 - v0, always made by triangle_edges_of, so always
+ * the same bits. The kd-tree's leaf-ordered copy of the primitives
+ * (accel/kd_local.h) holds this. */
 typedef struct triangle_edges {
-    bsp_vec3 v0;     /* first vertex */
-    bsp_vec3 e1, e2; /* v1 - v0, v2 - v0 */
+    bsp_vec3 v0, e1, e2;
 } triangle_edges;
 
 typedef struct triangle_shape {
-    union { /* the kernel's part, also by name: tr->v0 is tr->edges.v0 */
-        triangle_edges edges;
+    union { /* the vertices, also by name: tr->v0 is tr->verts.v0 */
+        triangle_verts verts;
         struct {
-            bsp_vec3 v0;     /* first vertex */
-            bsp_vec3 e1, e2; /* v1 - v0, v2 - v0 */
+            bsp_vec3 v0, v1, v2;
         };
     };
-    bsp_vec3 normal;   /* unit normal of e1 x e2 (the vertex winding) */
-    uint32_t normals;  /* first of 3 vertex normals in the pool, or SHAPE_NO_NORMALS */
+    bsp_vec3 normal;  /* unit normal of e1 x e2 (the vertex winding) */
+    uint32_t normals; /* first of 3 vertex normals in the pool, or SHAPE_NO_NORMALS */
+    int8_t edge_exp;  /* triangle_edge_exp of its edges */
 } triangle_shape;
+
+static inline triangle_edges triangle_edges_of(const triangle_verts *t)
+{
+    triangle_edges e;
+    e.v0 = t->v0;
+    e.e1 = bsp_v3(t->v1.x - t->v0.x, t->v1.y - t->v0.y, t->v1.z - t->v0.z);
+    e.e2 = bsp_v3(t->v2.x - t->v0.x, t->v2.y - t->v0.y, t->v2.z - t->v0.z);
+    return e;
+}
+
+/* The edges' size for the watertight margin (isect_first.h, triangle_margin)
+ * as a power of two: the least k >= -127 with 2^k > |e1|_1 + |e2|_1 (a
+ * byte, so that it fits the kd-tree's 80-byte records; at most 2^104 for
+ * coordinates within 1e30). */
+static inline int triangle_edge_exp(const triangle_edges *e)
+{
+    double n = (fabs(e->e1.x) + fabs(e->e1.y) + fabs(e->e1.z)) +
+               (fabs(e->e2.x) + fabs(e->e2.y) + fabs(e->e2.z));
+    int k = -127;
+    if (n >= 0x1p-127) {
+        int ex;
+        (void)frexp(n, &ex); /* n < 2^ex */
+        k = ex;
+    }
+    return k > 127 ? 127 : k;
+}
+
+/* 2^K for -127 <= K <= 127, made from its bits (no libm call in the hot
+ * loop). */
+static inline double triangle_edge_norm(int k)
+{
+    uint64_t bits = (uint64_t)(k + 1023) << 52;
+    double x;
+    memcpy(&x, &bits, sizeof x);
+    return x;
+}
 
 typedef struct polygon_shape {
     bsp_vec3 normal;  /* unit normal (Newell's method: the winding's orientation) */

@@ -2,12 +2,14 @@
  * triangle.c — the triangle: setup, exact bounds, Möller–Trumbore ray
  * intersection and the interpolated shading normal of patch triangles.
  *
- * The triangle intersected is exactly {v0 + u e1 + v e2 : u, v >= 0,
- * u + v <= 1} on the stored v0, e1, e2. The inside test runs on the
- * unnormalised barycentrics (sign-corrected so the determinant is positive),
- * so points exactly on an edge or a vertex are inside. A ray parallel to the
- * plane (determinant 0, which includes rays lying in the plane) misses. t never
- * depends on ray->tmin/tmax.
+ * Möller–Trumbore computes t and the barycentrics on v0 and the edges
+ * e1 = v1 - v0, e2 = v2 - v0 (rounded); whether the ray passes inside is
+ * decided on the vertices themselves where rounding could matter (the
+ * watertight decision, geom/isect.h), so that a ray through an edge that two
+ * triangles share hits at least one of them. Points exactly on an edge or a
+ * vertex are inside. A ray parallel to the plane (determinant 0, which
+ * includes rays lying in the plane) misses. t never depends on
+ * ray->tmin/tmax.
  */
 #include <math.h>
 
@@ -35,8 +37,10 @@ int triangle_setup(triangle_shape *tr, bsp_vec3 a, bsp_vec3 b, bsp_vec3 c, uint3
     if (!v3_is_finite(unit))
         return 0;
     tr->v0 = a;
-    tr->e1 = e1;
-    tr->e2 = e2;
+    tr->v1 = b;
+    tr->v2 = c;
+    triangle_edges te = triangle_edges_of(&tr->verts);
+    tr->edge_exp = (int8_t)triangle_edge_exp(&te);
     tr->normal = unit;
     tr->normals = normals;
     return 1;
@@ -62,13 +66,20 @@ static bsp_box add_exact_sum(bsp_box box, bsp_vec3 base, bsp_vec3 edge)
     return box;
 }
 
+/* The vertices, and the exact v0 + e1 and v0 + e2 of the rounded edges, whose
+ * triangle Möller–Trumbore's points lie on (within an ulp of v1 and v2). */
 bsp_box triangle_bounds(const triangle_shape *tr)
 {
-    bsp_box box;
-    box.lo = tr->v0;
-    box.hi = tr->v0;
-    box = add_exact_sum(box, tr->v0, tr->e1);
-    return add_exact_sum(box, tr->v0, tr->e2);
+    bsp_box box = {tr->v0, tr->v0};
+    const bsp_vec3 more[2] = {tr->v1, tr->v2};
+    for (int i = 0; i < 2; i++)
+        for (int k = 0; k < 3; k++) {
+            box.lo.v[k] = fmin(box.lo.v[k], more[i].v[k]);
+            box.hi.v[k] = fmax(box.hi.v[k], more[i].v[k]);
+        }
+    const triangle_edges e = triangle_edges_of(&tr->verts);
+    box = add_exact_sum(box, tr->v0, e.e1);
+    return add_exact_sum(box, tr->v0, e.e2);
 }
 
 int triangle_intersect(const triangle_shape *tr, const bsp_ray *ray, double *t, double *u,
@@ -77,7 +88,13 @@ int triangle_intersect(const triangle_shape *tr, const bsp_ray *ray, double *t, 
     isect_ray r;
     isect_ray_init(&r, ray, INFINITY); /* no hit check: it needs the scene scale */
     double bu, bv, det;
-    if (!triangle_isect(&tr->edges, &r, ray->tmax, t, &bu, &bv, &det))
+    const triangle_edges e = triangle_edges_of(&tr->verts);
+    int hit = triangle_isect(&e, triangle_edge_norm(tr->edge_exp), &r, ray->tmax, t, &bu, &bv,
+                             &det);
+    if (hit == TRIANGLE_NEAR_EDGE)
+        hit = triangle_watertight(&tr->verts, &r) &&
+              triangle_isect_decided(&e, &r, ray->tmax, t, &bu, &bv, &det);
+    if (!hit)
         return 0;
     triangle_uv(bu, bv, det, u, v);
     return 1;

@@ -88,7 +88,7 @@ bsp_status bsp_scene_prim_vertex(const bsp_scene *s, size_t prim, size_t i, bsp_
     bsp_vec3 v;
     if (p->shape == SHAPE_TRIANGLE) {
         const triangle_shape *tr = &s->triangles[p->slot];
-        v = i == 0 ? tr->v0 : v3_add(tr->v0, i == 1 ? tr->e1 : tr->e2);
+        v = i == 0 ? tr->v0 : i == 1 ? tr->v1 : tr->v2;
     } else {
         v = s->verts[s->polygons[p->slot].first + i];
     }

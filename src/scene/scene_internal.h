@@ -221,20 +221,40 @@ typedef struct scene_isect_hit {
     double t, bu, bv, det;
 } scene_isect_hit;
 
-/* The kernel of a shape of kind SHAPE (shape_kind) whose data is at DATA
- * (its triangle_edges, sphere_shape, polygon_shape or cone_shape, in the
- * scene or a copy of it: the kd-tree's, accel/kd_local.h), inline with the
- * kernels of geom/isect.h; polygons read S's vertex and slab pools. The t
- * computed never depends on ray->tmin / TMAX, which only filter. Writes *H
- * only on a hit. */
+/* A triangle the direct test found within the margin of an edge
+ * (TRIANGLE_NEAR_EDGE, geom/isect.h): decided by the watertight test on
+ * primitive PRIM's vertices in S, then finished on its edges TR. Not
+ * inlined: rays come here on purpose (none in the default renders of the
+ * dragon, teapot, tetra or gears). */
+static __attribute__((noinline, unused)) int
+scene_triangle_near_edge(const bsp_scene *s, uint32_t prim, const triangle_edges *tr,
+                         const isect_ray *ray, double tmax, scene_isect_hit *h)
+{
+    const triangle_verts *v = &s->triangles[s->prims[prim].slot].verts;
+    return triangle_watertight(v, ray) &&
+           triangle_isect_decided(tr, ray, tmax, &h->t, &h->bu, &h->bv, &h->det);
+}
+
+/* The kernel of a shape of kind SHAPE whose data is at DATA (its
+ * triangle_edges, sphere_shape, polygon_shape or cone_shape, in the scene
+ * or a copy of it: the kd-tree's, accel/kd_local.h), inline with the
+ * kernels of geom/isect.h; polygons read S's vertex and slab pools, and a
+ * triangle near an edge its vertices there (primitive PRIM; EDGE_EXP its
+ * triangle_edge_exp). The t computed never depends on ray->tmin / TMAX,
+ * which only filter. Writes *H only on a hit. */
 static inline __attribute__((always_inline)) int
-shape_isect(const bsp_scene *s, unsigned shape, const void *data, const isect_ray *ray,
-            double tmax, scene_isect_hit *h)
+shape_isect(const bsp_scene *s, unsigned shape, const void *data, uint32_t prim, int edge_exp,
+            const isect_ray *ray, double tmax, scene_isect_hit *h)
 {
     /* triangles first: the switch's compare tree costs them 2-3 more
      * instructions per test (tetra, teapot and nurbtst are all triangles) */
-    if (__builtin_expect(shape == SHAPE_TRIANGLE, 1))
-        return triangle_isect(data, ray, tmax, &h->t, &h->bu, &h->bv, &h->det);
+    if (__builtin_expect(shape == SHAPE_TRIANGLE, 1)) {
+        int r = triangle_isect(data, triangle_edge_norm(edge_exp), ray, tmax, &h->t, &h->bu,
+                               &h->bv, &h->det);
+        if (__builtin_expect(r == TRIANGLE_NEAR_EDGE, 0))
+            r = scene_triangle_near_edge(s, prim, data, ray, tmax, h);
+        return r;
+    }
     switch ((shape_kind)shape) {
     case SHAPE_SPHERE:
         if (!sphere_isect(data, ray, tmax, &h->t))
@@ -258,7 +278,8 @@ shape_isect(const bsp_scene *s, unsigned shape, const void *data, const isect_ra
 }
 
 /* Intersection of primitive PRIM of S (shape_isect on the scene's data), as
- * the naive method tests it. */
+ * the naive method tests it. A triangle's edges are made here from its
+ * vertices, as every copy makes them (triangle_edges_of). */
 static inline __attribute__((always_inline)) int
 scene_isect(const bsp_scene *s, uint32_t prim, const isect_ray *ray, double tmax,
             scene_isect_hit *h)
@@ -266,9 +287,11 @@ scene_isect(const bsp_scene *s, uint32_t prim, const isect_ray *ray, double tmax
     const prim_record *p = &s->prims[prim];
     const void *data;
     switch ((shape_kind)p->shape) {
-    case SHAPE_TRIANGLE:
-        data = &s->triangles[p->slot].edges;
-        break;
+    case SHAPE_TRIANGLE: {
+        const triangle_shape *tr = &s->triangles[p->slot];
+        const triangle_edges e = triangle_edges_of(&tr->verts);
+        return shape_isect(s, SHAPE_TRIANGLE, &e, prim, tr->edge_exp, ray, tmax, h);
+    }
     case SHAPE_SPHERE:
         data = &s->spheres[p->slot];
         break;
@@ -281,7 +304,7 @@ scene_isect(const bsp_scene *s, uint32_t prim, const isect_ray *ray, double tmax
     default:
         return 0;
     }
-    return shape_isect(s, p->shape, data, ray, tmax, h);
+    return shape_isect(s, p->shape, data, prim, 0, ray, tmax, h);
 }
 
 /* The public hit record of H on primitive PRIM. */
