@@ -36,7 +36,8 @@ static int same_as_scene(const bsp_scene *s, const kd_local *L, uint32_t p)
         const polygon_shape *pg = &s->polygons[r->slot];
         return L->u.polygon.first == pg->first && L->u.polygon.count == pg->count &&
                L->u.polygon.d == pg->d && L->u.polygon.nslabs == pg->nslabs &&
-               L->u.polygon.axis_u == pg->axis_u && L->u.polygon.axis_v == pg->axis_v;
+               L->u.polygon.axis_u == pg->axis_u && L->u.polygon.axis_v == pg->axis_v &&
+               L->u.polygon.wt_base == pg->wt_base;
     }
     case SHAPE_CONE:
         return L->u.cone == &s->cones[r->slot];

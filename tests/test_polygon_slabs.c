@@ -108,6 +108,7 @@ TEST(polygon_slabs_match_the_walk_of_every_edge)
     enum { POLYGONS = 2000, QUERIES = 200, MAXN = 160 };
     static bsp_vec3 v[MAXN];
     size_t with_slabs = 0, without = 0, inside = 0, outside = 0, hits = 0, mismatches = 0;
+    size_t near = 0;
     for (int pi = 0; pi < POLYGONS; pi++) {
         polygon_slab_pool pool = {0};
         int shape = pi % 4, tilt = (pi / 4) % 3;
@@ -130,14 +131,18 @@ TEST(polygon_slabs_match_the_walk_of_every_edge)
         for (uint32_t qi = 0; qi < QUERIES; qi++) {
             double px, py;
             query_point(v, n, au, av, qi, &px, &py);
-            int walk = polygon_contains_2d(v, n, au, av, px, py);
+            /* with a margin, also the "near" bit (POLYGON_NEAR) */
+            const double delta = qi % 3 == 0 ? 0.0 : qi % 3 == 1 ? 1e-9 : 0.01 * (qi % 7);
+            int walk = polygon_contains_2d(v, n, au, av, px, py, delta);
+            near += (walk & POLYGON_NEAR) != 0;
             if (p.nslabs) {
-                int slab = polygon_contains_slabs(&p, &pool, px, py);
+                int slab = polygon_contains_slabs(&p, &pool, px, py, delta);
                 if (slab != walk && mismatches++ < 5)
                     CHECK_MSG(
                         0, "polygon %d (shape %d, n %u), point (%.17g, %.17g): slabs %d, walk %d",
                         pi, shape, n, px, py, slab, walk);
             }
+            walk &= POLYGON_INSIDE;
             inside += walk != 0;
             outside += walk == 0;
             /* and through the ray test: a ray along the dropped axis */
@@ -167,6 +172,7 @@ TEST(polygon_slabs_match_the_walk_of_every_edge)
               without);
     CHECK_MSG(inside > 50000 && outside > 50000 && hits > 50000,
               "inside %zu, outside %zu, hits %zu", inside, outside, hits);
+    CHECK_MSG(near > 20000, "near %zu", near);
 }
 
 /* A zigzag whose every edge spans most slabs: more than POLYGON_SLAB_BUDGET
@@ -231,7 +237,7 @@ TEST(polygon_slabs_octagon_by_hand)
     } c[] = {{0, 0, 1},      {1.9, 0, 1},    {2, 0, 0},   {-2, 0, 1},   {0, -2, 1},    {0, 2, 0},
              {1.4, -1.5, 1}, {1.5, -1.5, 0}, {0, 2.5, 0}, {0, -2.5, 0}, {-1.5, 1.4, 1}};
     for (size_t i = 0; i < sizeof c / sizeof c[0]; i++)
-        CHECK_MSG(polygon_contains_slabs(&p, &pool, c[i].x, c[i].y) == c[i].in,
+        CHECK_MSG(polygon_contains_slabs(&p, &pool, c[i].x, c[i].y, 0.0) == c[i].in,
                   "(%g, %g) should be %s", c[i].x, c[i].y, c[i].in ? "inside" : "outside");
     polygon_slab_pool_free(&pool);
 }

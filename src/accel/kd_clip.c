@@ -904,5 +904,6 @@ int kd_polygon_meets_box(const bsp_scene *scene, uint32_t prim, const bsp_box *g
     if (n == 0)
         return 0; /* the plane misses G */
     bsp_vec3 c = v3_scale(sum, 1.0 / n);
-    return polygon_contains_2d(v, p->count, p->axis_u, p->axis_v, c.v[p->axis_u], c.v[p->axis_v]);
+    return polygon_contains_2d(v, p->count, p->axis_u, p->axis_v, c.v[p->axis_u], c.v[p->axis_v],
+                               0.0);
 }

@@ -105,7 +105,7 @@ static int local_matches(const kd_local *L, const bsp_scene *s)
                memcmp(&a->d, &b->d, sizeof a->d) == 0 && a->first == b->first &&
                a->count == b->count && a->normals == b->normals && a->axis_u == b->axis_u &&
                a->axis_v == b->axis_v && a->slab_first == b->slab_first &&
-               a->nslabs == b->nslabs;
+               a->nslabs == b->nslabs && memcmp(&a->wt_base, &b->wt_base, sizeof a->wt_base) == 0;
     }
     case SHAPE_CONE:
         return L->u.cone == &s->cones[r->slot];

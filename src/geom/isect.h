@@ -42,6 +42,7 @@ typedef struct isect_ray {
     double tmin; /* accepted t: tmin <= t <= tmax (closed) */
     double tol;  /* the hit check's distance (above); INFINITY: no check */
     double edge_scale; /* 2^-40 |dir|_1: the triangle's margin (triangle_margin) */
+    double org_norm, dir_norm; /* |org|_1, |dir|_1: the polygon's margin (polygon_margin) */
 } isect_ray;
 
 /* The hit check's distance relative to the scene scale (scene_internal.h):
@@ -58,7 +59,9 @@ static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray, double tol)
     r->dd = v3_dot(ray->dir, ray->dir);
     r->tmin = ray->tmin;
     r->tol = tol;
-    r->edge_scale = 0x1p-40 * ((fabs(ray->dir.x) + fabs(ray->dir.y)) + fabs(ray->dir.z));
+    r->dir_norm = (fabs(ray->dir.x) + fabs(ray->dir.y)) + fabs(ray->dir.z);
+    r->org_norm = (fabs(ray->org.x) + fabs(ray->org.y)) + fabs(ray->org.z);
+    r->edge_scale = 0x1p-40 * r->dir_norm;
 }
 
 /* The first tests of the sphere, cone, triangle and polygon kernels, for doubles
@@ -161,33 +164,57 @@ static inline double edge_side(double px, double py, double qx, double qy)
     return fma(px, qy, -w) + err;
 }
 
+/* The ray's frame of the watertight tests: the axis of the direction's
+ * largest component (kz) and the shear that takes the direction onto it. */
+typedef struct ray_shear {
+    int kx, ky, kz;
+    double sx, sy;
+} ray_shear;
+
+static inline ray_shear ray_shear_of(const isect_ray *ray)
+{
+    const double *d = ray->dir.v;
+    const double ax = fabs(d[0]), ay = fabs(d[1]), az = fabs(d[2]);
+    ray_shear sh;
+    sh.kz = ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2);
+    sh.kx = sh.kz == 2 ? 0 : sh.kz + 1;
+    sh.ky = sh.kx == 2 ? 0 : sh.kx + 1;
+    sh.sx = d[sh.kx] / d[sh.kz];
+    sh.sy = d[sh.ky] / d[sh.kz];
+    return sh;
+}
+
+/* Vertex V in the ray's frame: the origin subtracted, then sheared along the
+ * direction onto the plane across kz (the ray becomes the point (0, 0)).
+ * A function of the vertex and the ray alone, so every face sharing the
+ * vertex gets the same (*X, *Y). */
+static inline void ray_shear_point(const ray_shear *sh, const isect_ray *ray, const bsp_vec3 *v,
+                                   double *x, double *y)
+{
+    const double *o = ray->org.v;
+    double h = v->v[sh->kz] - o[sh->kz];
+    *x = (v->v[sh->kx] - o[sh->kx]) - sh->sx * h;
+    *y = (v->v[sh->ky] - o[sh->ky]) - sh->sy * h;
+}
+
 /* Woop, Benthin and Wald's watertight test ("Watertight ray/triangle
  * intersection", JCGT 2013): whether the ray's line passes through the
- * triangle, decided on the vertices moved into the ray's frame (the origin
- * subtracted, then sheared along the direction onto the plane across its
- * largest component). Every vertex gets the same coordinates in every
- * triangle that shares it, each edge's side is edge_side of its two ends
- * (so the triangle on the other side of a shared edge computes the same
- * value negated), and the signs are exact: of two triangles sharing an edge,
- * any line through it passes inside at least one, whatever their windings.
- * Both faces count: inside when the three sides agree in sign (zeros
- * agreeing with either); all three 0, a line in the triangle's plane,
- * misses. Not inlined: taken only near an edge (triangle_solve). */
+ * triangle, decided on its vertices in the ray's frame (ray_shear_point).
+ * Each edge's side is edge_side of its two ends, so the triangle on the
+ * other side of a shared edge computes the same value negated, and the
+ * signs are exact: of two triangles sharing an edge, any line through it
+ * passes inside at least one, whatever their windings. Both faces count:
+ * inside when the three sides agree in sign (zeros agreeing with either);
+ * all three 0, a line in the triangle's plane, misses. Not inlined: taken
+ * only near an edge (triangle_solve). */
 static __attribute__((noinline, unused)) int triangle_watertight(const triangle_verts *tr,
                                                                  const isect_ray *ray)
 {
-    const double *d = ray->dir.v, *o = ray->org.v;
-    const double ax = fabs(d[0]), ay = fabs(d[1]), az = fabs(d[2]);
-    const int kz = ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2);
-    const int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
-    const double sx = d[kx] / d[kz], sy = d[ky] / d[kz];
-    const bsp_vec3 *v[3] = {&tr->v0, &tr->v1, &tr->v2};
+    const ray_shear sh = ray_shear_of(ray);
     double x[3], y[3];
-    for (int i = 0; i < 3; i++) {
-        double h = v[i]->v[kz] - o[kz];
-        x[i] = (v[i]->v[kx] - o[kx]) - sx * h;
-        y[i] = (v[i]->v[ky] - o[ky]) - sy * h;
-    }
+    ray_shear_point(&sh, ray, &tr->v0, &x[0], &y[0]);
+    ray_shear_point(&sh, ray, &tr->v1, &x[1], &y[1]);
+    ray_shear_point(&sh, ray, &tr->v2, &x[2], &y[2]);
     const double s0 = edge_side(x[1], y[1], x[2], y[2]); /* the edge v1 v2 */
     const double s1 = edge_side(x[2], y[2], x[0], y[0]); /* v2 v0 */
     const double s2 = edge_side(x[0], y[0], x[1], y[1]); /* v0 v1 */
@@ -330,35 +357,48 @@ ISECT_INLINE void triangle_uv(double bu, double bv, double det, double *u, doubl
     *v = bv / det;
 }
 
-/* --- polygon (even-odd crossing test; see polygon.c) ----------------------- */
+/* --- polygon (even-odd crossing test, watertight near edges; polygon.c) -- */
+
+/* The crossing test's answer: bit 0 inside, bit 1 "near": the point lies
+ * within the margin of the boundary, and the watertight test decides. */
+#define POLYGON_INSIDE 1
+#define POLYGON_NEAR 2
 
 /* Even-odd test of (px, py) against the polygon projected on axes (au, av).
  * An edge crosses the line v = py when exactly one endpoint lies above it
  * (v > py); that endpoint has the larger v, so the other one is the lower
  * endpoint the abscissa is computed from — the operands a comparison of the
  * two v values picks, so the same bits. Each vertex is compared with py once.
- * Not inlined: inlined, this loop's registers made the kd-tree descent it
- * is inlined into spill (spd:tree: +17 instructions per primary ray; out of
- * line: -19); `unused`: a file that includes this header without testing
+ * Near (POLYGON_NEAR) when a vertex lies within DELTA of the line or a
+ * crossing edge within DELTA of the point (its distance |px - x| dv / len
+ * against DELTA, len bounded by |du| + dv): an edge within DELTA of the point
+ * either crosses the line or has an end within DELTA of it. DELTA = 0: never
+ * near. Not inlined: inlined, this loop's registers made the kd-tree descent
+ * it is inlined into spill (spd:tree: +17 instructions per primary ray; out
+ * of line: -19); `unused`: a file that includes this header without testing
  * polygons gets no warning. */
 static __attribute__((noinline, unused)) int
-polygon_contains_2d(const bsp_vec3 *vs, uint32_t count, int au, int av, double px, double py)
+polygon_contains_2d(const bsp_vec3 *vs, uint32_t count, int au, int av, double px, double py,
+                    double delta)
 {
-    int inside = 0;
+    int inside = 0, near = 0;
     const double *prev = vs[count - 1].v;
     int prev_above = prev[av] > py;
     for (uint32_t i = 0; i < count; i++) {
         const double *cur = vs[i].v;
         int cur_above = cur[av] > py;
+        near |= fabs(cur[av] - py) < delta;
         if (cur_above != prev_above) {
             const double *lo = cur_above ? prev : cur, *hi = cur_above ? cur : prev;
-            double x = lo[au] + (py - lo[av]) * (hi[au] - lo[au]) / (hi[av] - lo[av]);
+            double du = hi[au] - lo[au], dv = hi[av] - lo[av];
+            double x = lo[au] + (py - lo[av]) * du / dv;
             inside ^= px < x;
+            near |= fabs(px - x) * dv < delta * (fabs(du) + dv);
         }
         prev = cur;
         prev_above = cur_above;
     }
-    return inside;
+    return inside | near << 1;
 }
 
 /* The last index j < HI with Y[j] <= V, for the ascending Y[0..HI] with
@@ -382,27 +422,100 @@ static inline uint32_t polygon_slab_of(const double *y, uint32_t hi, double v)
  * lower endpoint's v is at most y[j] and its upper one's at least y[j + 1],
  * y[j] <= py < y[j + 1] being py's slab among the vertices' distinct v; the
  * slab lists those edges, and each abscissa is computed from the same
- * operands as there (the lower endpoint and the two differences). Outside
- * every slab (or py NaN) no edge crosses: outside. Not inlined, as above. */
+ * operands as there (the lower endpoint and the two differences). The
+ * vertices nearest the line are the slab's bounds (outside every slab: the
+ * first or the last). Outside every slab (or py NaN) no edge crosses:
+ * outside. Not inlined, as above. */
 static __attribute__((noinline, unused)) int
-polygon_contains_slabs(const polygon_shape *p, const polygon_slab_pool *sp, double px, double py)
+polygon_contains_slabs(const polygon_shape *p, const polygon_slab_pool *sp, double px, double py,
+                       double delta)
 {
     const double *y = sp->y + p->slab_first;
     const uint32_t k = p->nslabs;
     if (!(py >= y[0] && py < y[k - 1]))
-        return 0;
+        return (fabs(y[0] - py) < delta || fabs(y[k - 1] - py) < delta) << 1;
     const uint32_t lo = polygon_slab_of(y, k - 1, py);
     const uint32_t *off = sp->off + p->slab_first;
-    int inside = 0;
+    int inside = 0, near = fabs(y[lo] - py) < delta || fabs(y[lo + 1] - py) < delta;
     for (uint32_t i = off[lo]; i < off[lo + 1]; i++) {
         const polygon_edge *e = &sp->edge[sp->entry[i]];
         double x = e->lo_u + (py - e->lo_v) * e->du / e->dv;
         inside ^= px < x;
+        near |= fabs(px - x) * e->dv < delta * (fabs(e->du) + e->dv);
+    }
+    return inside | near << 1;
+}
+
+/* The even-odd test on the ray's own shear: whether the ray's line passes
+ * inside the polygon of the vertices VS (COUNT) themselves, counting the
+ * edges that cross the half-line x > 0, y = 0 of the ray's frame
+ * (ray_shear_point). An edge crosses when exactly one end lies above the
+ * line (y > 0) and the line meets it at x > 0, whose sign is that of
+ * edge_side(lower end, upper end): exact, and the same value in every
+ * polygon and triangle sharing the edge. So, around any edge or vertex, the
+ * faces' parities add up to the parity of their union's boundary: a line
+ * through the union passes inside at least one face. Not inlined: taken
+ * only near an edge (polygon_isect). */
+static __attribute__((noinline, unused)) int polygon_watertight(const bsp_vec3 *vs, uint32_t count,
+                                                                const isect_ray *ray)
+{
+    const ray_shear sh = ray_shear_of(ray);
+    double px, py;
+    ray_shear_point(&sh, ray, &vs[count - 1], &px, &py);
+    int inside = 0;
+    for (uint32_t i = 0; i < count; i++) {
+        double cx, cy;
+        ray_shear_point(&sh, ray, &vs[i], &cx, &cy);
+        if ((cy > 0.0) != (py > 0.0)) {
+            int c_up = cy > 0.0;
+            double s = c_up ? edge_side(px, py, cx, cy) : edge_side(cx, cy, px, py);
+            inside ^= s > 0.0;
+        }
+        px = cx;
+        py = cy;
     }
     return inside;
 }
 
-/* SLABS: the pool of P's slabs, or NULL: walk every edge (the same answer). */
+/* The margin of the crossing test at the point of the plane at TT (DENOM =
+ * n . d): how far, in the projection, the rounding of the point, of the
+ * crossings and of the watertight test's sheared vertices, and the
+ * vertices' distance from the plane (polygon_shape.wt_base), can move the
+ * boundary, 2^12 times over; the ray's obliquity 1 + |d|_1 / |n . d|
+ * magnifies each. 0 for a polygon not planar to rounding. */
+static inline double polygon_margin(const polygon_shape *p, const isect_ray *ray, double tt,
+                                    double denom)
+{
+    if (!(p->wt_base >= 0.0))
+        return 0.0;
+    return (0x1p-41 * (ray->org_norm + fabs(tt) * ray->dir_norm) + p->wt_base) *
+           (1.0 + ray->dir_norm / fabs(denom));
+}
+
+/* The distance in the projection on (au, av) from (px, py) to the nearest
+ * edge of the polygon VS (COUNT). Not inlined: taken only near an edge. */
+static __attribute__((noinline, unused)) double
+polygon_edge_distance(const bsp_vec3 *vs, uint32_t count, int au, int av, double px, double py)
+{
+    double best = INFINITY;
+    const double *a = vs[count - 1].v;
+    for (uint32_t i = 0; i < count; i++) {
+        const double *b = vs[i].v;
+        double ex = b[au] - a[au], ey = b[av] - a[av], wx = px - a[au], wy = py - a[av];
+        double ee = ex * ex + ey * ey, s = ee > 0.0 ? (wx * ex + wy * ey) / ee : 0.0;
+        s = s < 0.0 ? 0.0 : s > 1.0 ? 1.0 : s;
+        best = fmin(best, hypot(wx - s * ex, wy - s * ey));
+        a = b;
+    }
+    return best;
+}
+
+/* SLABS: the pool of P's slabs, or NULL: walk every edge (the same answer).
+ * Near an edge the watertight test decides. A hit must lie within the hit
+ * check's distance (ray->tol) of the polygon, as every hit must
+ * (kd_tree.h): where the margin exceeds it (a ray nearly in the plane,
+ * whose point the plane's equation places poorly) and the point is not
+ * inside, the point's distance from the edges is checked. */
 ISECT_INLINE int polygon_isect(const polygon_shape *p, const bsp_vec3 *verts,
                                const polygon_slab_pool *slabs, const isect_ray *ray, double tmax,
                                double *t)
@@ -415,8 +528,18 @@ ISECT_INLINE int polygon_isect(const polygon_shape *p, const bsp_vec3 *verts,
     int au = p->axis_u, av = p->axis_v;
     double px = ray->org.v[au] + ray->dir.v[au] * tt;
     double py = ray->org.v[av] + ray->dir.v[av] * tt;
-    if (!(slabs && p->nslabs ? polygon_contains_slabs(p, slabs, px, py)
-                             : polygon_contains_2d(verts + p->first, p->count, au, av, px, py)))
+    const bsp_vec3 *vs = verts + p->first;
+    const double delta = polygon_margin(p, ray, tt, denom);
+    int r = slabs && p->nslabs ? polygon_contains_slabs(p, slabs, px, py, delta)
+                               : polygon_contains_2d(vs, p->count, au, av, px, py, delta);
+    if (__builtin_expect(r & POLYGON_NEAR, 0)) {
+        int in = polygon_watertight(vs, p->count, ray);
+        if (in && !(r & POLYGON_INSIDE) && delta > ray->tol &&
+            !(polygon_edge_distance(vs, p->count, au, av, px, py) <= ray->tol))
+            in = 0;
+        r = in;
+    }
+    if (!(r & POLYGON_INSIDE))
         return 0;
     *t = tt;
     return 1;

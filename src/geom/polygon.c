@@ -9,15 +9,42 @@
  * crossing rule is half-open: an edge counts when exactly one endpoint lies
  * strictly above the point, and the point must be strictly left of the
  * crossing. Each edge's crossing abscissa is computed from its lower endpoint,
- * so an edge shared by two polygons gives both the same abscissa and a point
- * on it belongs to exactly one of them. Rays parallel to the plane miss.
- * t never depends on ray->tmin/tmax.
+ * so an edge shared by two coplanar polygons gives both the same abscissa
+ * and a point on it belongs to exactly one of them. Where the point lies
+ * within rounding of an edge, the crossing test on the ray's own shear
+ * decides (watertight: geom/isect.h), so that two polygons that share an
+ * edge but not a plane let no ray through between them. Rays parallel to
+ * the plane miss. t never depends on ray->tmin/tmax.
  */
 #include <math.h>
 
 #include "geom/isect.h"
 #include "geom/shapes.h"
 #include "geom/vec.h"
+
+/* A polygon whose vertices lie off its plane by more than this fraction of
+ * its extent is not planar: its neighbours' surfaces (each on its own mean
+ * plane) do not meet even in exact arithmetic, and no crossing test can
+ * close that gap; it gets no watertight decision. */
+#define POLYGON_PLANAR_REL 0x1p-30
+
+/* polygon_shape.wt_base for the vertices VS (COUNT) on the plane
+ * (N, D): 2^-40 R + 2^12 h, R the largest |v|_1 (the size of the rounding
+ * of coordinates) and h the largest distance of a vertex from the plane;
+ * -1 when h exceeds POLYGON_PLANAR_REL of the extent. */
+static double polygon_wt_base(bsp_vec3 n, double d, const bsp_vec3 *vs, uint32_t count)
+{
+    double r = 0.0, h = 0.0, extent = 0.0;
+    for (uint32_t i = 0; i < count; i++) {
+        r = fmax(r, fabs(vs[i].x) + fabs(vs[i].y) + fabs(vs[i].z));
+        h = fmax(h, fabs(v3_dot(n, vs[i]) - d));
+        bsp_vec3 e = v3_sub(vs[i], vs[0]);
+        extent = fmax(extent, fabs(e.x) + fabs(e.y) + fabs(e.z));
+    }
+    if (!(h <= POLYGON_PLANAR_REL * extent))
+        return -1.0;
+    return 0x1p-40 * r + 0x1p12 * h;
+}
 
 int polygon_setup(polygon_shape *p, const bsp_vec3 *verts, uint32_t first, uint32_t count,
                   uint32_t normals)
@@ -55,6 +82,7 @@ int polygon_setup(polygon_shape *p, const bsp_vec3 *verts, uint32_t first, uint3
     p->axis_v = (uint8_t)((drop + 2) % 3);
     p->slab_first = 0;
     p->nslabs = 0;
+    p->wt_base = polygon_wt_base(n, p->d, vs, count);
     return 1;
 }
 

@@ -127,6 +127,9 @@ typedef struct polygon_shape {
     uint32_t slab_first; /* with nslabs > 0: its slabs in a polygon_slab_pool */
     uint32_t nslabs;     /* distinct vertex v values of its slabs; 0: none (the
                             crossing test walks every edge) */
+    double wt_base; /* the polygon's part of the watertight margin
+                       (polygon_margin, geom/isect.h); < 0: not planar to
+                       rounding, no watertight decision */
 } polygon_shape;
 
 /* An edge of a polygon as the crossing test uses it: its lower endpoint
