@@ -21,7 +21,14 @@
  * or a cone seen from far away), the kernel solves from a point of the ray
  * near the shape instead (triangle_isect_near, cone_isect), decided by the
  * ray and the shape alone, never by tmin/tmax. Polygons need no check: the
- * inside test runs on the computed point.
+ * inside test runs on the computed point (near an edge, the distance from
+ * the edges is checked where the watertight test decides: polygon_isect).
+ *
+ * Watertight: where a ray passes within rounding of a triangle's or a
+ * polygon's edge, inside or outside is decided on the ray's own shear from
+ * the vertices themselves (triangle_watertight, polygon_watertight), so two
+ * faces that share an edge see it as the same line and a closed mesh lets
+ * no ray through (docs/precision.md).
  */
 #ifndef BSPRAY_GEOM_ISECT_H
 #define BSPRAY_GEOM_ISECT_H
