@@ -517,6 +517,31 @@ polygon_edge_distance(const bsp_vec3 *vs, uint32_t count, int au, int av, double
     return best;
 }
 
+/* Whether the ray's point on P's plane at TT (DENOM = n . d) lies inside P,
+ * SLABS and the near-edge cases as polygon_isect describes. Not inlined:
+ * it holds the one call to a crossing test the kernel made before, so the
+ * loops the kernel is inlined into keep their registers. */
+static __attribute__((noinline, unused)) int
+polygon_inside(const polygon_shape *p, const bsp_vec3 *verts, const polygon_slab_pool *slabs,
+               const isect_ray *ray, double tt, double denom)
+{
+    int au = p->axis_u, av = p->axis_v;
+    double px = ray->org.v[au] + ray->dir.v[au] * tt;
+    double py = ray->org.v[av] + ray->dir.v[av] * tt;
+    const bsp_vec3 *vs = verts + p->first;
+    const double delta = polygon_margin(p, ray, tt, denom);
+    int r = slabs && p->nslabs ? polygon_contains_slabs(p, slabs, px, py, delta)
+                               : polygon_contains_2d(vs, p->count, au, av, px, py, delta);
+    if (__builtin_expect(r & POLYGON_NEAR, 0)) {
+        int in = polygon_watertight(vs, p->count, ray);
+        if (in && !(r & POLYGON_INSIDE) && delta > ray->tol &&
+            !(polygon_edge_distance(vs, p->count, au, av, px, py) <= ray->tol))
+            in = 0;
+        r = in;
+    }
+    return r & POLYGON_INSIDE;
+}
+
 /* SLABS: the pool of P's slabs, or NULL: walk every edge (the same answer).
  * Near an edge the watertight test decides. A hit must lie within the hit
  * check's distance (ray->tol) of the polygon, as every hit must
@@ -532,21 +557,7 @@ ISECT_INLINE int polygon_isect(const polygon_shape *p, const bsp_vec3 *verts,
     double tt = polygon_plane(n.x, n.y, n.z, p->d, o.x, o.y, o.z, d.x, d.y, d.z, &denom);
     if (denom == 0.0 || !(tt >= ray->tmin && tt <= tmax))
         return 0;
-    int au = p->axis_u, av = p->axis_v;
-    double px = ray->org.v[au] + ray->dir.v[au] * tt;
-    double py = ray->org.v[av] + ray->dir.v[av] * tt;
-    const bsp_vec3 *vs = verts + p->first;
-    const double delta = polygon_margin(p, ray, tt, denom);
-    int r = slabs && p->nslabs ? polygon_contains_slabs(p, slabs, px, py, delta)
-                               : polygon_contains_2d(vs, p->count, au, av, px, py, delta);
-    if (__builtin_expect(r & POLYGON_NEAR, 0)) {
-        int in = polygon_watertight(vs, p->count, ray);
-        if (in && !(r & POLYGON_INSIDE) && delta > ray->tol &&
-            !(polygon_edge_distance(vs, p->count, au, av, px, py) <= ray->tol))
-            in = 0;
-        r = in;
-    }
-    if (!(r & POLYGON_INSIDE))
+    if (!polygon_inside(p, verts, slabs, ray, tt, denom))
         return 0;
     *t = tt;
     return 1;
