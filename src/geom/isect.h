@@ -329,8 +329,8 @@ static __attribute__((noinline, unused)) int triangle_isect_near(const triangle_
 
 /* The triangle with the edges' size ENORM (triangle_edge_norm): 1 on a hit,
  * 0 on a miss, and TRIANGLE_NEAR_EDGE when the ray passes within the margin
- * of an edge: then the caller decides by triangle_watertight on the
- * triangle's vertices and, if inside, finishes with triangle_isect_decided.
+ * of an edge: then the caller finishes with triangle_isect_near_edge on the
+ * triangle's vertices.
  * On a hit also writes the unnormalised barycentrics and the (positive)
  * determinant: u = *bu / *det, v = *bv / *det, computed only for the final
  * hit by triangle_uv. */
@@ -345,12 +345,16 @@ ISECT_INLINE int triangle_isect(const triangle_edges *tr, double enorm, const is
     return r;
 }
 
-/* triangle_isect for a ray the watertight test has put inside. Not inlined:
- * taken only near an edge. */
+/* triangle_isect's answer for a ray it found near an edge
+ * (TRIANGLE_NEAR_EDGE): inside or outside by triangle_watertight on the
+ * triangle's vertices V, then the hit finished on its edges TR. Not
+ * inlined: taken only near an edge. */
 static __attribute__((noinline, unused)) int
-triangle_isect_decided(const triangle_edges *tr, const isect_ray *ray, double tmax, double *t,
-                       double *bu_out, double *bv_out, double *det_out)
+triangle_isect_near_edge(const triangle_edges *tr, const triangle_verts *v, const isect_ray *ray,
+                         double tmax, double *t, double *bu_out, double *bv_out, double *det_out)
 {
+    if (!triangle_watertight(v, ray))
+        return 0;
     int r = triangle_solve(tr, 0.0, ray, ray->org, 0.0, TRIANGLE_DECIDED, tmax, t, bu_out,
                            bv_out, det_out);
     if (r < 0)

@@ -71,12 +71,8 @@ static bsp_box add_exact_sum(bsp_box box, bsp_vec3 base, bsp_vec3 edge)
 bsp_box triangle_bounds(const triangle_shape *tr)
 {
     bsp_box box = {tr->v0, tr->v0};
-    const bsp_vec3 more[2] = {tr->v1, tr->v2};
-    for (int i = 0; i < 2; i++)
-        for (int k = 0; k < 3; k++) {
-            box.lo.v[k] = fmin(box.lo.v[k], more[i].v[k]);
-            box.hi.v[k] = fmax(box.hi.v[k], more[i].v[k]);
-        }
+    box = box_add_point(box, tr->v1);
+    box = box_add_point(box, tr->v2);
     const triangle_edges e = triangle_edges_of(&tr->verts);
     box = add_exact_sum(box, tr->v0, e.e1);
     return add_exact_sum(box, tr->v0, e.e2);
@@ -92,8 +88,7 @@ int triangle_intersect(const triangle_shape *tr, const bsp_ray *ray, double *t, 
     int hit = triangle_isect(&e, triangle_edge_norm(tr->edge_exp), &r, ray->tmax, t, &bu, &bv,
                              &det);
     if (hit == TRIANGLE_NEAR_EDGE)
-        hit = triangle_watertight(&tr->verts, &r) &&
-              triangle_isect_decided(&e, &r, ray->tmax, t, &bu, &bv, &det);
+        hit = triangle_isect_near_edge(&e, &tr->verts, &r, ray->tmax, t, &bu, &bv, &det);
     if (!hit)
         return 0;
     triangle_uv(bu, bv, det, u, v);
