@@ -290,10 +290,13 @@ ISECT_INLINE int triangle_solve(const triangle_edges *tr, double enorm, const is
      * triangle at (u, v). Rounding adds about 1e-16 (|tvec| + |t d| + |e1| +
      * |e2|) to that; a ray almost in the plane leaves det as rounding noise
      * and a large residual. (NaN, outside the domain, passes: those queries
-     * take no check.) */
+     * take no check.) The edges are read from *TR here, not from the
+     * copies above: a loop indexing those kept them on the stack, stored
+     * and reloaded on every test (dragon res3's traversal: 1.4 % more
+     * instructions). */
     const double lim = det * ray->tol;
     for (int k = 0; k < 3; k++) {
-        double res = det * tvec.v[k] + bt * ray->dir.v[k] - bu * e1.v[k] - bv * e2.v[k];
+        double res = det * tvec.v[k] + bt * ray->dir.v[k] - bu * tr->e1.v[k] - bv * tr->e2.v[k];
         if (fabs(res) > lim)
             return -1;
     }
