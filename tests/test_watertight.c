@@ -16,11 +16,13 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "bspray/bspray.h"
 #include "geom/isect.h"
 #include "geom/shapes.h"
 #include "harness.h"
+#include "scene/scene_internal.h"
 
 /* A closed mesh: vertices and faces of 3 or 4 vertices (a face of 3 has
  * idx[3] unused). */
@@ -262,6 +264,33 @@ static int count_ray(tally *c, int got, int want, int plain, int trial, int k, u
     return 0;
 }
 
+/* The triangle kernel as the traversals run it, with the ray's bound of the
+ * margin made for REACH (isect_ray.tri_bound), finished near an edge as
+ * shape_isect finishes it; *T the hit's t. */
+static int kernel_with_reach(const triangle_shape *tr, const bsp_ray *r,
+                             const triangle_reach *reach, double *t)
+{
+    isect_ray ir;
+    isect_ray_init(&ir, r, INFINITY, reach);
+    const triangle_edges e = triangle_edges_of(&tr->verts);
+    double bu, bv, det;
+    int hit = triangle_isect(&e, triangle_edge_norm(tr->edge_exp), &ir, r->tmax, t, &bu, &bv, &det);
+    if (hit == TRIANGLE_NEAR_EDGE)
+        hit = triangle_isect_near_edge(&e, &tr->verts, &ir, r->tmax, t, &bu, &bv, &det);
+    return hit;
+}
+
+/* Whether the ray's bound made for REACH covers the triangle's margin. */
+static int bound_covers_margin(const triangle_shape *tr, const bsp_ray *r,
+                               const triangle_reach *reach)
+{
+    isect_ray ir;
+    isect_ray_init(&ir, r, INFINITY, reach);
+    const bsp_vec3 tv = v3_sub(r->org, tr->v0);
+    return triangle_margin(tv.x, tv.y, tv.z, triangle_edge_norm(tr->edge_exp), ir.edge_scale) <=
+           ir.tri_bound;
+}
+
 TEST(watertight_margin_gives_the_watertight_answer)
 {
     unsigned long long rng = 0x5eed5eed1234ULL;
@@ -277,15 +306,34 @@ TEST(watertight_margin_gives_the_watertight_answer)
         if (!triangle_setup(&tr, a, b, c, SHAPE_NO_NORMALS))
             continue;
         const bsp_vec3 vs[3] = {a, b, c};
+        /* the reach of a scene of this triangle alone (scene_update_scale),
+         * and a far looser one: the ray's bound only chooses where the
+         * margin is computed, so both must give the margin's answer */
+        triangle_reach tight = {0.0, triangle_edge_norm(tr.edge_exp)};
+        const bsp_box tb = triangle_bounds(&tr);
+        for (int ax = 0; ax < 3; ax++)
+            tight.radius += fmax(fabs(tb.lo.v[ax]), fabs(tb.hi.v[ax]));
+        const triangle_reach loose = {1e3 * tight.radius, 0x1p10 * tight.enorm};
         for (int k = 0; k < 300; k++) {
             double dist;
             bsp_ray r = ray_near_boundary(&rng, vs, 3, size, k, &dist);
             const bsp_vec3 o = r.org;
-            double t, u, v;
+            double t = 0.0, u, v;
             int got = triangle_intersect(&tr, &r, &t, &u, &v);
+            double t_tight = 0.0, t_loose = 0.0;
+            int got_tight = kernel_with_reach(&tr, &r, &tight, &t_tight);
+            int got_loose = kernel_with_reach(&tr, &r, &loose, &t_loose);
+            if (!bound_covers_margin(&tr, &r, &tight) || got_tight != got || got_loose != got ||
+                (got && (memcmp(&t_tight, &t, sizeof t) || memcmp(&t_loose, &t, sizeof t)))) {
+                harness_fail(__FILE__, __LINE__,
+                             "trial %d ray %d: the ray's bound of the margin changed the answer "
+                             "(%d, tight %d, loose %d; t %.17g %.17g %.17g)",
+                             trial, k, got, got_tight, got_loose, t, t_tight, t_loose);
+                return;
+            }
 
             isect_ray ir;
-            isect_ray_init(&ir, &r, INFINITY);
+            isect_ray_init(&ir, &r, INFINITY, NULL);
             const bsp_vec3 tv = v3_sub(o, tr.v0), e1 = v3_sub(tr.v1, tr.v0),
                            e2 = v3_sub(tr.v2, tr.v0);
             double det, bu, bv, qx, qy, qz;
@@ -305,6 +353,59 @@ TEST(watertight_margin_gives_the_watertight_answer)
     CHECK(count.rays > 100000);
     CHECK(count.hits > count.rays / 10 && count.hits < count.rays - count.rays / 10);
     CHECK(count.differs_from_plain > 100);
+}
+
+/* The scene's reach (scene_update_scale) and the ray's bound made from it:
+ * for every ray of the precision domain and every triangle of the scene,
+ * the bound is at least the triangle's margin, so the traversals, which
+ * compute the margin only within the bound, answer as the margin does. On
+ * the SPD tetrahedron and teapot (triangles beside polygons), and on a mesh
+ * of triangles of mixed sizes far from the origin, its largest triangle
+ * added last. */
+TEST(watertight_scene_bound_covers_every_margin)
+{
+    bsp_scene *scenes[3] = {NULL, NULL, NULL};
+    bsp_error err;
+    REQUIRE(bsp_scene_load("spd:tetra", &scenes[0], &err) == BSP_OK);
+    REQUIRE(bsp_scene_load("spd:teapot", &scenes[1], &err) == BSP_OK);
+    unsigned long long rng = 0xb0b0cafe11ULL;
+    scenes[2] = bsp_scene_create();
+    REQUIRE(scenes[2]);
+    const bsp_vec3 far = {{3e5, -2e5, 7e4}};
+    for (int i = 0; i < 200; i++) {
+        double size = i == 199 ? 50.0 : pow(10.0, uniform(&rng, -3, 0));
+        bsp_vec3 a = v3_madd(far, random_unit(&rng), uniform(&rng, 0.0, 20.0));
+        bsp_vec3 tri[3] = {a, v3_madd(a, random_unit(&rng), size),
+                           v3_madd(a, random_unit(&rng), size)};
+        REQUIRE(bsp_scene_add_polygon(scenes[2], tri, 3, &err) == BSP_OK);
+    }
+    for (int sc = 0; sc < 3; sc++) {
+        const bsp_scene *s = scenes[sc];
+        const bsp_box box = bsp_scene_bounds(s);
+        const bsp_vec3 mid = v3_scale(v3_add(box.lo, box.hi), 0.5);
+        const double ext = v3_length(v3_sub(box.hi, box.lo));
+        size_t tested = 0;
+        int bad = 0;
+        for (int k = 0; k < 300 && !bad; k++) {
+            /* origins inside, near and far (up to 10^5 scene sizes) */
+            double reach = ext * pow(10.0, uniform(&rng, -2, 5));
+            bsp_ray r = {v3_madd(mid, random_unit(&rng), reach), random_unit(&rng), 0.0, INFINITY};
+            r.dir = v3_scale(r.dir, pow(10.0, uniform(&rng, -3, 3)));
+            const double o[3] = {r.org.x, r.org.y, r.org.z};
+            if (!scene_ray_in_domain(s, o, v3_dot(r.dir, r.dir)))
+                continue;
+            for (size_t t = 0; t < s->ntriangles && !bad; t++, tested++)
+                if (!bound_covers_margin(&s->triangles[t], &r, &s->tri_reach)) {
+                    bad = 1;
+                    harness_fail(__FILE__, __LINE__,
+                                 "scene %d, ray %d: the bound is below triangle %zu's margin", sc,
+                                 k, t);
+                }
+        }
+        CHECK(tested > 10000);
+    }
+    for (int sc = 0; sc < 3; sc++)
+        bsp_scene_destroy(scenes[sc]);
 }
 
 /* The polygon's margin (polygon_isect): on rays aimed within a few ulps of
@@ -343,7 +444,7 @@ TEST(watertight_polygon_margin_gives_the_watertight_answer)
             int got = polygon_intersect(&pg, vs, NULL, &r, &t);
 
             isect_ray ir;
-            isect_ray_init(&ir, &r, INFINITY);
+            isect_ray_init(&ir, &r, INFINITY, NULL);
             double denom;
             double tt = polygon_plane(pg.normal.x, pg.normal.y, pg.normal.z, pg.d, o.x, o.y, o.z,
                                       r.dir.x, r.dir.y, r.dir.z, &denom);

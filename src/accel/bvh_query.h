@@ -81,7 +81,7 @@ static inline void query_start(query_state *c, const bsp_scene *s, const bvh *t,
     *c = (query_state){.s = s, .rec = t->rec, .from = from, .best_p = BSP_NO_PRIM,
                        .tmax = ray->tmax};
     c->best = (scene_isect_hit){INFINITY, 0.0, 0.0, 1.0};
-    isect_ray_init(&c->r, ray, s->hit_tol);
+    isect_ray_init(&c->r, ray, s->hit_tol, &s->tri_reach);
 }
 
 /* Ends the query C, which tested BOXES node boxes: its counters into Q

@@ -119,7 +119,7 @@ static int walk_begin(walk *w, const grid *g, const bsp_scene *s, bsp_query *q, 
     w->mbox = q->stamp;
     if (w->mbox && from < s->nprims)
         w->mbox[from] = w->stamp;
-    isect_ray_init(&w->r, ray, s->hit_tol); /* in the domain: checked */
+    isect_ray_init(&w->r, ray, s->hit_tol, &s->tri_reach); /* in the domain: checked */
     w->tmax = ray->tmax;
     w->best = (scene_isect_hit){INFINITY, 0.0, 0.0, 1.0};
     w->best_p = BSP_NO_PRIM;

@@ -363,7 +363,7 @@ int kd_intersect(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t 
      * most tmax, so a hit is better than the best so far when its t is
      * smaller or, at equal t, its index is lower. */
     isect_ray r;
-    isect_ray_init(&r, ray, s->hit_tol); /* in the domain: checked */
+    isect_ray_init(&r, ray, s->hit_tol, &s->tri_reach); /* in the domain: checked */
     double tmax = ray->tmax;
     scene_isect_hit best = {INFINITY, 0.0, 0.0, 1.0}, h;
     uint32_t best_p = BSP_NO_PRIM;
@@ -436,7 +436,7 @@ int kd_occluded(const bsp_accel *a, bsp_query *q, const bsp_ray *ray, uint32_t f
     if (mbox && skip != UINT32_MAX)
         mbox[skip] = stamp;
     isect_ray r;
-    isect_ray_init(&r, ray, s->hit_tol); /* in the domain: checked */
+    isect_ray_init(&r, ray, s->hit_tol, &s->tri_reach); /* in the domain: checked */
     const double tmax = ray->tmax;
     scene_isect_hit h;
     int found = 0;

@@ -65,7 +65,7 @@ bsp_box cone_bounds(const cone_shape *c)
 int cone_intersect(const cone_shape *c, const bsp_ray *ray, double *t)
 {
     isect_ray r;
-    isect_ray_init(&r, ray, INFINITY); /* no hit check: it needs the scene scale */
+    isect_ray_init(&r, ray, INFINITY, NULL); /* no hit check: it needs the scene scale */
     return cone_isect(c, &r, ray->tmax, t);
 }
 

@@ -49,8 +49,17 @@ typedef struct isect_ray {
     double tmin; /* accepted t: tmin <= t <= tmax (closed) */
     double tol;  /* the hit check's distance (above); INFINITY: no check */
     double edge_scale; /* 2^-40 |dir|_1: the triangle's margin (triangle_margin) */
+    double tri_bound;  /* at least the triangle_margin of every triangle within the
+                          triangle_reach the ray was made with (INFINITY: none given) */
     double org_norm, dir_norm; /* |org|_1, |dir|_1: the polygon's margin (polygon_margin) */
 } isect_ray;
+
+/* Where a scene's triangles lie, for isect_ray.tri_bound: every vertex v has
+ * |v|_1 <= radius, and every triangle's triangle_edge_norm is at most enorm
+ * (0: no triangles). */
+typedef struct triangle_reach {
+    double radius, enorm;
+} triangle_reach;
 
 /* The hit check's distance relative to the scene scale (scene_internal.h):
  * a quarter of the kd-tree's padding (kd_tree.h defines the padding as four
@@ -59,7 +68,15 @@ typedef struct isect_ray {
  * precision domain), so no real hit fails it. */
 #define ISECT_HIT_TOL_REL 2.5e-8
 
-static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray, double tol)
+/* RAY for the kernels, with the hit check's distance TOL; REACH: where the
+ * triangles it may be tested against lie, or NULL (not known). tri_bound is
+ * twice the margin triangle_margin gives a triangle of size REACH->enorm
+ * with |o - v0|_1 = |o|_1 + REACH->radius, at least the true |o - v0|_1;
+ * the factor 2 covers the rounding of both expressions. A few operations
+ * per ray (the scene's centre in place of the origin cost 14), and none of
+ * the margin's per test. */
+static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray, double tol,
+                                  const triangle_reach *reach)
 {
     r->org = ray->org;
     r->dir = ray->dir;
@@ -69,6 +86,13 @@ static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray, double tol)
     r->dir_norm = (fabs(ray->dir.x) + fabs(ray->dir.y)) + fabs(ray->dir.z);
     r->org_norm = (fabs(ray->org.x) + fabs(ray->org.y)) + fabs(ray->org.z);
     r->edge_scale = 0x1p-40 * r->dir_norm;
+    r->tri_bound = INFINITY;
+    if (reach && reach->enorm > 0.0) {
+        const double tn = r->org_norm + reach->radius;
+        const double b = 2.0 * (r->edge_scale * ((tn + reach->enorm) * reach->enorm));
+        if (b == b) /* NaN (an origin of NaN or inf): none */
+            r->tri_bound = b;
+    }
 }
 
 /* The first tests of the sphere, cone, triangle and polygon kernels, for doubles
@@ -270,17 +294,25 @@ ISECT_INLINE int triangle_solve(const triangle_edges *tr, double enorm, const is
     triangle_bary(d.x, d.y, d.z, tvec.x, tvec.y, tvec.z, e1.x, e1.y, e1.z, e2.x, e2.y, e2.z, &det,
                   &bu, &bv, &qvec.x, &qvec.y, &qvec.z);
     double bt = v3_dot(e2, qvec);
-    /* decided already: no margin, only det != 0 */
-    const double m = mode != TRIANGLE_DIRECT
-                         ? INFINITY
-                         : triangle_margin(tvec.x, tvec.y, tvec.z, enorm, ray->edge_scale);
+    /* First against the ray's bound of the margin (isect_ray.tri_bound,
+     * M >= m): a value below -M is below -m, all at least M are at least m,
+     * so the answer is the margin's; the margin itself is computed only for
+     * a ray within M of an edge (dragon res3's traversal: 1.1 % fewer
+     * instructions). Decided already: no margin, only det != 0. */
+    const double mb = mode != TRIANGLE_DIRECT ? INFINITY : ray->tri_bound;
     int neg;
-    const int maybe = triangle_range(&det, &bu, &bv, m, &neg);
+    const int maybe = triangle_range(&det, &bu, &bv, mb, &neg);
     bt = neg ? -bt : bt;
     if (!maybe)
         return 0;
-    if (mode == TRIANGLE_DIRECT && !(bu >= m && bv >= m && det - (bu + bv) >= m))
-        return TRIANGLE_NEAR_EDGE;
+    if (mode == TRIANGLE_DIRECT && !(bu >= mb && bv >= mb && det - (bu + bv) >= mb)) {
+        const double m = triangle_margin(tvec.x, tvec.y, tvec.z, enorm, ray->edge_scale);
+        const double lo = -m;
+        if (!(bu >= lo && bv >= lo && det - (bu + bv) >= lo))
+            return 0;
+        if (!(bu >= m && bv >= m && det - (bu + bv) >= m))
+            return TRIANGLE_NEAR_EDGE;
+    }
     /* The hit check, before the interval: whether the careful path runs
      * must not depend on tmin/tmax, or a closest-hit loop (whose tmax
      * follows the best hit) would see another t than a loop with another

@@ -105,7 +105,7 @@ int polygon_intersect(const polygon_shape *p, const bsp_vec3 *verts,
                       const polygon_slab_pool *slabs, const bsp_ray *ray, double *t)
 {
     isect_ray r;
-    isect_ray_init(&r, ray, INFINITY); /* no hit check: it needs the scene scale */
+    isect_ray_init(&r, ray, INFINITY, NULL); /* no hit check: it needs the scene scale */
     return polygon_isect(p, verts, slabs, &r, ray->tmax, t);
 }
 

@@ -41,7 +41,7 @@ bsp_box sphere_bounds(const sphere_shape *s)
 int sphere_intersect(const sphere_shape *s, const bsp_ray *ray, double *t)
 {
     isect_ray r;
-    isect_ray_init(&r, ray, INFINITY); /* no hit check: it needs the scene scale */
+    isect_ray_init(&r, ray, INFINITY, NULL); /* no hit check: it needs the scene scale */
     return sphere_isect(s, &r, ray->tmax, t);
 }
 

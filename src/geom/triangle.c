@@ -82,7 +82,7 @@ int triangle_intersect(const triangle_shape *tr, const bsp_ray *ray, double *t, 
                        double *v)
 {
     isect_ray r;
-    isect_ray_init(&r, ray, INFINITY); /* no hit check: it needs the scene scale */
+    isect_ray_init(&r, ray, INFINITY, NULL); /* no hit check: it needs the scene scale */
     double bu, bv, det;
     const triangle_edges e = triangle_edges_of(&tr->verts);
     int hit = triangle_isect(&e, triangle_edge_norm(tr->edge_exp), &r, ray->tmax, t, &bu, &bv,

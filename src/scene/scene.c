@@ -149,6 +149,12 @@ static bsp_status push_prim(bsp_scene *s, bsp_prim_kind kind, shape_kind shape, 
         }
     } else {
         s->kind_count[kind]++;
+        if (shape == SHAPE_TRIANGLE) {
+            int k = s->triangles[slot].edge_exp;
+            if (!s->has_triangles || k > s->tri_edge_exp_max)
+                s->tri_edge_exp_max = k;
+            s->has_triangles = 1;
+        }
         s->bounds = box_union(s->bounds, bsp_scene_prim_bounds(s, s->nprims - 1));
         scene_update_scale(s);
     }
@@ -528,6 +534,16 @@ void scene_update_scale(bsp_scene *s)
     double scale = scene_scale(s);
     s->far_origin = RAY_FAR_ORIGIN_REL * scale;
     s->hit_tol = ISECT_HIT_TOL_REL * scale;
+    /* every vertex lies in the bounds: |v|_1 is at most the sum over the
+     * axes of the larger end's magnitude (rounding: tri_bound's factor 2) */
+    triangle_reach *r = &s->tri_reach;
+    r->radius = 0.0;
+    r->enorm = 0.0;
+    if (s->has_triangles && !box_is_empty(s->bounds)) {
+        for (int k = 0; k < 3; k++)
+            r->radius += fmax(fabs(s->bounds.lo.v[k]), fabs(s->bounds.hi.v[k]));
+        r->enorm = triangle_edge_norm(s->tri_edge_exp_max);
+    }
 }
 
 size_t bsp_scene_kind_count(const bsp_scene *s, bsp_prim_kind kind)

@@ -97,6 +97,10 @@ struct bsp_scene {
     /* from scene_scale, kept with bounds (scene_update_scale): */
     double far_origin; /* RAY_FAR_ORIGIN_REL scales: the precision domain */
     double hit_tol;    /* ISECT_HIT_TOL_REL scales: the kernels' hit check */
+    triangle_reach tri_reach; /* the live triangles' (isect_ray.tri_bound): from the
+                                 bounds and 2^tri_edge_exp_max */
+    int tri_edge_exp_max; /* the largest triangle_edge_exp of a triangle added */
+    int has_triangles;
 
     char *warnings[SCENE_MAX_WARNINGS];
     size_t nwarnings;
@@ -185,7 +189,7 @@ static inline int scene_ray_in_domain(const bsp_scene *s, const double o[3], dou
  * precision domain, without it outside. */
 static inline void scene_isect_ray_init(const bsp_scene *s, isect_ray *r, const bsp_ray *ray)
 {
-    isect_ray_init(r, ray, INFINITY);
+    isect_ray_init(r, ray, INFINITY, &s->tri_reach);
     if (scene_ray_in_domain(s, ray->org.v, r->dd))
         r->tol = s->hit_tol;
 }
