@@ -224,6 +224,32 @@ TEST(kd_file_refuses_foreign_truncated_and_flipped_files)
     bsp_scene_destroy(one);
     bsp_scene_destroy(moved);
 
+    /* a file bspray 0.2.0 wrote for a scene of triangles: it read a
+     * triangle's vertex v back as v0 + (v - v0), and 0.1 + (0.01 - 0.1) is
+     * 0.009999999999999995. A tree saved for the scene with that vertex
+     * carries the fingerprint 0.2.0 gave the scene with 0.01, and is named
+     * as such */
+    const char *tri = "p 3\n0.1 0 0\n0.01 1 0\n0 0 1\ns 0 0 3 0.5\n";
+    const char *tri_rounded = "p 3\n0.1 0 0\n0.009999999999999995 1 0\n0 0 1\ns 0 0 3 0.5\n";
+    bsp_scene *exact = NULL, *rounded = NULL;
+    REQUIRE(bsp_scene_load_nff_memory(tri, strlen(tri), "tri.nff", &exact, &err) == BSP_OK);
+    REQUIRE(bsp_scene_load_nff_memory(tri_rounded, strlen(tri_rounded), "tri_rounded.nff",
+                                      &rounded, &err) == BSP_OK);
+    char trip[1024];
+    harness_tmp_path(trip, sizeof trip, "tri.kdt");
+    bsp_accel *a2 = kd_test_build(rounded, BSP_ACCEL_SAH);
+    REQUIRE(bsp_accel_save(a2, trip, &err) == BSP_OK);
+    bsp_accel_destroy(a2);
+    expect_refused(exact, trip, BSP_ERR_INVALID, "by bspray 0.2.0 or older", "0.2.0's rounding");
+    /* and the other way round it is another scene */
+    harness_tmp_path(trip, sizeof trip, "tri_exact.kdt");
+    bsp_accel *a3 = kd_test_build(exact, BSP_ACCEL_SAH);
+    REQUIRE(bsp_accel_save(a3, trip, &err) == BSP_OK);
+    bsp_accel_destroy(a3);
+    expect_refused(rounded, trip, BSP_ERR_INVALID, "another scene", "the rounded vertex");
+    bsp_scene_destroy(exact);
+    bsp_scene_destroy(rounded);
+
     /* not a file of ours, missing, a directory, truncated anywhere, padded */
     expect_refused(s, "/nonexistent/x.kdt", BSP_ERR_IO, "cannot open", "missing");
     expect_refused(s, harness_tmpdir(), BSP_ERR_IO, "regular file", "directory");

@@ -13,8 +13,8 @@
 
 #define BSPRAY_VERSION_MAJOR 0
 #define BSPRAY_VERSION_MINOR 2
-#define BSPRAY_VERSION_PATCH 0
-#define BSPRAY_VERSION_STRING "0.2.0"
+#define BSPRAY_VERSION_PATCH 1
+#define BSPRAY_VERSION_STRING "0.2.1"
 
 #include "bspray/error.h"
 #include "bspray/geom.h"

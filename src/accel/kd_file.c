@@ -111,8 +111,11 @@ static uint64_t fnv_vec(uint64_t h, bsp_vec3 v)
 /* FNV-1a over every primitive's kind and the numbers of its surface, as
  * the scene reads them back (bsp_scene_prim_sphere, _cone, _vertex): two
  * scenes with the same fingerprint have the same primitives in the same
- * order, to the bit. */
-static uint64_t scene_fingerprint(const bsp_scene *s)
+ * order, to the bit. With ROUNDED_TRIANGLES, a triangle's second and third
+ * vertices as bspray 0.2.0 and older read them back, v0 + (v - v0) rounded
+ * (they kept v0 and the edges): what those versions wrote in their files,
+ * so that such a file is named for what it is (bspray_kd_load). */
+static uint64_t scene_fingerprint_of(const bsp_scene *s, int rounded_triangles)
 {
     uint64_t h = 14695981039346656037ull;
     size_t n = bsp_scene_prim_count(s);
@@ -134,9 +137,15 @@ static uint64_t scene_fingerprint(const bsp_scene *s)
         case BSP_PRIM_PATCH: {
             size_t nv = bsp_scene_prim_vertex_count(s, p);
             h = fnv_u64(h, (uint64_t)nv);
+            bsp_vec3 v0 = {{0.0, 0.0, 0.0}};
             for (size_t i = 0; i < nv; i++)
-                if (bsp_scene_prim_vertex(s, p, i, &a) == BSP_OK)
+                if (bsp_scene_prim_vertex(s, p, i, &a) == BSP_OK) {
+                    if (i == 0)
+                        v0 = a;
+                    else if (rounded_triangles && s->prims[p].shape == SHAPE_TRIANGLE)
+                        a = bsp_v3(v0.x + (a.x - v0.x), v0.y + (a.y - v0.y), v0.z + (a.z - v0.z));
                     h = fnv_vec(h, a);
+                }
             break;
         }
         default:
@@ -144,6 +153,11 @@ static uint64_t scene_fingerprint(const bsp_scene *s)
         }
     }
     return h;
+}
+
+static uint64_t scene_fingerprint(const bsp_scene *s)
+{
+    return scene_fingerprint_of(s, 0);
 }
 
 /* --- saving ------------------------------------------------------------------------------- */
@@ -517,6 +531,13 @@ bsp_status bsp_accel_load(const bsp_scene *scene, const char *path, bsp_accel **
                        size, (unsigned long long)fh.nnodes, (unsigned long long)fh.nrefs);
     else if (!header_options_valid(&fh))
         st = error_set(err, BSP_ERR_PARSE, path, 0, "damaged: its build options are invalid");
+    else if (fh.nprims_scene == (uint64_t)bsp_scene_prim_count(scene) &&
+             fh.fingerprint != scene_fingerprint(scene) &&
+             fh.fingerprint == scene_fingerprint_of(scene, 1))
+        st = error_set(err, BSP_ERR_INVALID, path, 0,
+                       "was saved for this scene by bspray 0.2.0 or older, which read its "
+                       "triangles' vertices rounded (v0 + (v1 - v0)); this version keeps them "
+                       "exact, and its trees differ: build the tree again");
     else if (fh.nprims_scene != (uint64_t)bsp_scene_prim_count(scene) ||
              fh.fingerprint != scene_fingerprint(scene))
         st = error_set(err, BSP_ERR_INVALID, path, 0,
