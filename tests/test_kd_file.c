@@ -190,6 +190,28 @@ static unsigned char *small_tree_file(const bsp_scene *s, const char *path, size
     return b;
 }
 
+/* Saves the SAH tree of the NFF text SAVED_FOR and loads the file for the
+ * NFF text LOADED_FOR: it must be refused as BSP_ERR_INVALID, the message
+ * containing WANT. */
+static void expect_refused_for(const char *saved_for, const char *loaded_for, const char *want,
+                               const char *label)
+{
+    bsp_scene *saved = NULL, *loaded = NULL;
+    bsp_error err;
+    REQUIRE(bsp_scene_load_nff_memory(saved_for, strlen(saved_for), "saved.nff", &saved, &err) ==
+            BSP_OK);
+    REQUIRE(bsp_scene_load_nff_memory(loaded_for, strlen(loaded_for), "loaded.nff", &loaded,
+                                      &err) == BSP_OK);
+    char path[1024];
+    harness_tmp_path(path, sizeof path, "saved.kdt");
+    bsp_accel *a = kd_test_build(saved, BSP_ACCEL_SAH);
+    REQUIRE(bsp_accel_save(a, path, &err) == BSP_OK);
+    bsp_accel_destroy(a);
+    expect_refused(loaded, path, BSP_ERR_INVALID, want, label);
+    bsp_scene_destroy(saved);
+    bsp_scene_destroy(loaded);
+}
+
 TEST(kd_file_refuses_foreign_truncated_and_flipped_files)
 {
     bsp_scene *s = kd_test_load("spd:jacks");
@@ -208,47 +230,20 @@ TEST(kd_file_refuses_foreign_truncated_and_flipped_files)
                       "f 1 0 0 1 0 0 0 1\ns 0 0 0 1\ns 2 0 0 1\ns 1 0 0 0.5\n";
     char nff2[512];
     snprintf(nff2, sizeof nff2, "%s", nff);
-    bsp_scene *one = NULL, *moved = NULL;
-    bsp_error err;
-    REQUIRE(bsp_scene_load_nff_memory(nff, strlen(nff), "one.nff", &one, &err) == BSP_OK);
     char *at = strstr(nff2, "s 1 0 0 0.5");
     REQUIRE(at);
     at[10] = '4';
-    REQUIRE(bsp_scene_load_nff_memory(nff2, strlen(nff2), "moved.nff", &moved, &err) == BSP_OK);
-    char onep[1024];
-    harness_tmp_path(onep, sizeof onep, "one.kdt");
-    bsp_accel *a1 = kd_test_build(one, BSP_ACCEL_SAH);
-    REQUIRE(bsp_accel_save(a1, onep, &err) == BSP_OK);
-    bsp_accel_destroy(a1);
-    expect_refused(moved, onep, BSP_ERR_INVALID, "another scene", "a sphere shrunk");
-    bsp_scene_destroy(one);
-    bsp_scene_destroy(moved);
+    expect_refused_for(nff, nff2, "another scene", "a sphere shrunk");
 
     /* a file bspray 0.2.0 wrote for a scene of triangles: it read a
      * triangle's vertex v back as v0 + (v - v0), and 0.1 + (0.01 - 0.1) is
      * 0.009999999999999995. A tree saved for the scene with that vertex
      * carries the fingerprint 0.2.0 gave the scene with 0.01, and is named
-     * as such */
+     * as such; the other way round it is another scene */
     const char *tri = "p 3\n0.1 0 0\n0.01 1 0\n0 0 1\ns 0 0 3 0.5\n";
     const char *tri_rounded = "p 3\n0.1 0 0\n0.009999999999999995 1 0\n0 0 1\ns 0 0 3 0.5\n";
-    bsp_scene *exact = NULL, *rounded = NULL;
-    REQUIRE(bsp_scene_load_nff_memory(tri, strlen(tri), "tri.nff", &exact, &err) == BSP_OK);
-    REQUIRE(bsp_scene_load_nff_memory(tri_rounded, strlen(tri_rounded), "tri_rounded.nff",
-                                      &rounded, &err) == BSP_OK);
-    char trip[1024];
-    harness_tmp_path(trip, sizeof trip, "tri.kdt");
-    bsp_accel *a2 = kd_test_build(rounded, BSP_ACCEL_SAH);
-    REQUIRE(bsp_accel_save(a2, trip, &err) == BSP_OK);
-    bsp_accel_destroy(a2);
-    expect_refused(exact, trip, BSP_ERR_INVALID, "by bspray 0.2.0 or older", "0.2.0's rounding");
-    /* and the other way round it is another scene */
-    harness_tmp_path(trip, sizeof trip, "tri_exact.kdt");
-    bsp_accel *a3 = kd_test_build(exact, BSP_ACCEL_SAH);
-    REQUIRE(bsp_accel_save(a3, trip, &err) == BSP_OK);
-    bsp_accel_destroy(a3);
-    expect_refused(rounded, trip, BSP_ERR_INVALID, "another scene", "the rounded vertex");
-    bsp_scene_destroy(exact);
-    bsp_scene_destroy(rounded);
+    expect_refused_for(tri_rounded, tri, "by bspray 0.2.0 or older", "0.2.0's rounding");
+    expect_refused_for(tri, tri_rounded, "another scene", "the rounded vertex");
 
     /* not a file of ours, missing, a directory, truncated anywhere, padded */
     expect_refused(s, "/nonexistent/x.kdt", BSP_ERR_IO, "cannot open", "missing");
@@ -269,6 +264,7 @@ TEST(kd_file_refuses_foreign_truncated_and_flipped_files)
     free(pad);
 
     /* every single bit of the file flipped in turn: each refused */
+    bsp_error err;
     size_t loaded = 0;
     for (size_t i = 0; i < n; i++) {
         for (int bit = 0; bit < 8; bit += 3) {
