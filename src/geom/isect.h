@@ -73,8 +73,8 @@ typedef struct triangle_reach {
  * twice the margin triangle_margin gives a triangle of size REACH->enorm
  * with |o - v0|_1 = |o|_1 + REACH->radius, at least the true |o - v0|_1;
  * the factor 2 covers the rounding of both expressions. A few operations
- * per ray (the scene's centre in place of the origin cost 14), and none of
- * the margin's per test. */
+ * per ray (a bound from the distance to the scene's centre took 14, most of
+ * what it saved), and none of the margin's per test. */
 static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray, double tol,
                                   const triangle_reach *reach)
 {
@@ -90,7 +90,11 @@ static inline void isect_ray_init(isect_ray *r, const bsp_ray *ray, double tol,
     if (reach && reach->enorm > 0.0) {
         const double tn = r->org_norm + reach->radius;
         const double b = 2.0 * (r->edge_scale * ((tn + reach->enorm) * reach->enorm));
-        if (b == b) /* NaN (an origin of NaN or inf): none */
+        /* none for NaN (an origin of NaN or inf), nor near the subnormals (a
+         * direction far outside the precision domain: there a product's
+         * rounding is no longer relative, and the bound might fall below a
+         * margin; in the domain the bound exceeds 2^-700) */
+        if (b >= 0x1p-960)
             r->tri_bound = b;
     }
 }
