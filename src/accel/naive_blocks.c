@@ -99,7 +99,7 @@ typedef struct scan {
 
 /* The ray, broadcast. */
 typedef struct ray2 {
-    nv2 ox, oy, oz, dx, dy, dz, dd, edge_scale;
+    nv2 ox, oy, oz, dx, dy, dz, dd, tri_bound;
 } ray2;
 
 /* sphere_isect's first test on lanes H * 2 and H * 2 + 1. */
@@ -139,8 +139,9 @@ static inline unsigned cone_pass(const naive_cone_block *b, int h, const ray2 *r
 }
 
 /* triangle_solve's first test (the direct solution): the barycentric range
- * widened by the margin. A miss there is the kernel's miss (its careful path
- * runs only after a direct hit fails the hit check). */
+ * widened by the ray's bound of the margin (isect_ray.tri_bound), as the
+ * kernel's first test widens it. A miss there is the kernel's miss (its
+ * careful path runs only after a direct hit fails the hit check). */
 static inline unsigned triangle_pass(const naive_triangle_block *b, int h, const ray2 *r,
                                      const scan *sc)
 {
@@ -152,9 +153,8 @@ static inline unsigned triangle_pass(const naive_triangle_block *b, int h, const
     nv2 det, bu, bv, qx, qy, qz;
     triangle_bary_v2(r->dx, r->dy, r->dz, tx, ty, tz, e1x, e1y, e1z, e2x, e2y, e2z, &det, &bu, &bv,
                      &qx, &qy, &qz);
-    nv2 m = triangle_margin_v2(tx, ty, tz, lanes(b->enorm, h), r->edge_scale);
     nm2 neg;
-    return mask_bits(triangle_range_v2(&det, &bu, &bv, m, &neg));
+    return mask_bits(triangle_range_v2(&det, &bu, &bv, r->tri_bound, &neg));
 }
 
 /* polygon_isect's first test: the plane met at t in [tmin, tmax], tmax the
@@ -222,7 +222,7 @@ static inline __attribute__((always_inline)) int scan_all(const naive_blocks *b,
 {
     const isect_ray *r = sc->r;
     const ray2 rv = {splat(r->org.x), splat(r->org.y), splat(r->org.z), splat(r->dir.x),
-                     splat(r->dir.y), splat(r->dir.z), splat(r->dd), splat(r->edge_scale)};
+                     splat(r->dir.y), splat(r->dir.z), splat(r->dd), splat(r->tri_bound)};
     size_t base = 0;
     SCAN_SHAPE(b->spheres, b->nsphere_blocks, b->nspheres, sphere_pass);
     SCAN_SHAPE(b->cones, b->ncone_blocks, b->ncones, cone_pass);
@@ -421,7 +421,6 @@ bsp_status naive_blocks_build(const bsp_scene *s, naive_blocks **out, bsp_error 
             put3(blk->vx, blk->vy, blk->vz, l, t.v0);
             put3(blk->e1x, blk->e1y, blk->e1z, l, t.e1);
             put3(blk->e2x, blk->e2y, blk->e2z, l, t.e2);
-            blk->enorm[l] = triangle_edge_norm(tr->edge_exp);
             blk->prim[l] = (uint32_t)i;
             break;
         }

@@ -48,7 +48,6 @@ typedef struct naive_triangle_block {
     double vx[NAIVE_LANES], vy[NAIVE_LANES], vz[NAIVE_LANES];       /* v0 */
     double e1x[NAIVE_LANES], e1y[NAIVE_LANES], e1z[NAIVE_LANES];    /* v1 - v0 */
     double e2x[NAIVE_LANES], e2y[NAIVE_LANES], e2z[NAIVE_LANES];    /* v2 - v0 */
-    double enorm[NAIVE_LANES]; /* triangle_edge_norm of the edges' size */
     uint32_t prim[NAIVE_LANES];
 } naive_triangle_block;
 
