@@ -265,19 +265,14 @@ static int count_ray(tally *c, int got, int want, int plain, int trial, int k, u
 }
 
 /* The triangle kernel as the traversals run it, with the ray's bound of the
- * margin made for REACH (isect_ray.tri_bound), finished near an edge as
- * shape_isect finishes it; *T the hit's t. */
+ * margin made for REACH (isect_ray.tri_bound); *T the hit's t. */
 static int kernel_with_reach(const triangle_shape *tr, const bsp_ray *r,
                              const triangle_reach *reach, double *t)
 {
     isect_ray ir;
     isect_ray_init(&ir, r, INFINITY, reach);
-    const triangle_edges e = triangle_edges_of(&tr->verts);
     double bu, bv, det;
-    int hit = triangle_isect(&e, triangle_edge_norm(tr->edge_exp), &ir, r->tmax, t, &bu, &bv, &det);
-    if (hit == TRIANGLE_NEAR_EDGE)
-        hit = triangle_isect_near_edge(&e, &tr->verts, &ir, r->tmax, t, &bu, &bv, &det);
-    return hit;
+    return triangle_isect_verts(&tr->verts, tr->edge_exp, &ir, r->tmax, t, &bu, &bv, &det);
 }
 
 /* Whether the ray's bound made for REACH covers the triangle's margin. */

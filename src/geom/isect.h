@@ -261,6 +261,13 @@ static __attribute__((noinline, unused)) int triangle_watertight(const triangle_
 /* What triangle_isect returns when the watertight test must decide. */
 #define TRIANGLE_NEAR_EDGE 2
 
+/* Whether the unnormalised barycentrics BU, BV and DET - (BU + BV) are all
+ * at least X (triangle_solve's tests against its margins). */
+static inline int triangle_all_at_least(double bu, double bv, double det, double x)
+{
+    return bu >= x && bv >= x && det - (bu + bv) >= x;
+}
+
 /* How triangle_solve decides inside or outside: by the margin, returning
  * TRIANGLE_NEAR_EDGE within it (DIRECT); or not at all, the caller having
  * decided (DECIDED: the ray's origin; SHIFTED: a point of the ray TS
@@ -309,12 +316,11 @@ ISECT_INLINE int triangle_solve(const triangle_edges *tr, double enorm, const is
     bt = neg ? -bt : bt;
     if (!maybe)
         return 0;
-    if (mode == TRIANGLE_DIRECT && !(bu >= mb && bv >= mb && det - (bu + bv) >= mb)) {
+    if (mode == TRIANGLE_DIRECT && !triangle_all_at_least(bu, bv, det, mb)) {
         const double m = triangle_margin(tvec.x, tvec.y, tvec.z, enorm, ray->edge_scale);
-        const double lo = -m;
-        if (!(bu >= lo && bv >= lo && det - (bu + bv) >= lo))
+        if (!triangle_all_at_least(bu, bv, det, -m))
             return 0;
-        if (!(bu >= m && bv >= m && det - (bu + bv) >= m))
+        if (!triangle_all_at_least(bu, bv, det, m))
             return TRIANGLE_NEAR_EDGE;
     }
     /* The hit check, before the interval: whether the careful path runs
@@ -399,6 +405,22 @@ triangle_isect_near_edge(const triangle_edges *tr, const triangle_verts *v, cons
     if (r < 0)
         return triangle_isect_near(tr, ray, tmax, t, bu_out, bv_out, det_out);
     return r;
+}
+
+/* The whole triangle kernel for a triangle whose vertices V are at hand
+ * (EDGE_EXP its triangle_edge_exp): triangle_isect on its edges, finished
+ * near an edge by triangle_isect_near_edge, as shape_isect finishes it on
+ * the scene's vertices. */
+static inline int triangle_isect_verts(const triangle_verts *v, int edge_exp,
+                                       const isect_ray *ray, double tmax, double *t,
+                                       double *bu_out, double *bv_out, double *det_out)
+{
+    const triangle_edges e = triangle_edges_of(v);
+    int hit = triangle_isect(&e, triangle_edge_norm(edge_exp), ray, tmax, t, bu_out, bv_out,
+                             det_out);
+    if (hit == TRIANGLE_NEAR_EDGE)
+        hit = triangle_isect_near_edge(&e, v, ray, tmax, t, bu_out, bv_out, det_out);
+    return hit;
 }
 
 ISECT_INLINE void triangle_uv(double bu, double bv, double det, double *u, double *v)

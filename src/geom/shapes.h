@@ -106,6 +106,9 @@ static inline int triangle_edge_exp(const triangle_edges *e)
     return k > 127 ? 127 : k;
 }
 
+/* Below every triangle_edge_exp: no triangle (bsp_scene.tri_edge_exp_max). */
+#define TRIANGLE_EDGE_EXP_NONE (-128)
+
 /* 2^K for -127 <= K <= 127, made from its bits (no libm call in the hot
  * loop). */
 static inline double triangle_edge_norm(int k)

@@ -84,11 +84,7 @@ int triangle_intersect(const triangle_shape *tr, const bsp_ray *ray, double *t, 
     isect_ray r;
     isect_ray_init(&r, ray, INFINITY, NULL); /* no hit check: it needs the scene scale */
     double bu, bv, det;
-    const triangle_edges e = triangle_edges_of(&tr->verts);
-    int hit = triangle_isect(&e, triangle_edge_norm(tr->edge_exp), &r, ray->tmax, t, &bu, &bv,
-                             &det);
-    if (hit == TRIANGLE_NEAR_EDGE)
-        hit = triangle_isect_near_edge(&e, &tr->verts, &r, ray->tmax, t, &bu, &bv, &det);
+    int hit = triangle_isect_verts(&tr->verts, tr->edge_exp, &r, ray->tmax, t, &bu, &bv, &det);
     if (!hit)
         return 0;
     triangle_uv(bu, bv, det, u, v);

@@ -55,6 +55,7 @@ bsp_scene *bsp_scene_create(void)
     s->materials[0] = default_material;
     s->nmaterials = 1;
     s->bounds = box_empty();
+    s->tri_edge_exp_max = TRIANGLE_EDGE_EXP_NONE;
     scene_update_scale(s);
     return s;
 }
@@ -149,12 +150,8 @@ static bsp_status push_prim(bsp_scene *s, bsp_prim_kind kind, shape_kind shape, 
         }
     } else {
         s->kind_count[kind]++;
-        if (shape == SHAPE_TRIANGLE) {
-            int k = s->triangles[slot].edge_exp;
-            if (!s->has_triangles || k > s->tri_edge_exp_max)
-                s->tri_edge_exp_max = k;
-            s->has_triangles = 1;
-        }
+        if (shape == SHAPE_TRIANGLE && s->triangles[slot].edge_exp > s->tri_edge_exp_max)
+            s->tri_edge_exp_max = s->triangles[slot].edge_exp;
         s->bounds = box_union(s->bounds, bsp_scene_prim_bounds(s, s->nprims - 1));
         scene_update_scale(s);
     }
@@ -539,7 +536,7 @@ void scene_update_scale(bsp_scene *s)
     triangle_reach *r = &s->tri_reach;
     r->radius = 0.0;
     r->enorm = 0.0;
-    if (s->has_triangles && !box_is_empty(s->bounds)) {
+    if (s->tri_edge_exp_max != TRIANGLE_EDGE_EXP_NONE && !box_is_empty(s->bounds)) {
         for (int k = 0; k < 3; k++)
             r->radius += fmax(fabs(s->bounds.lo.v[k]), fabs(s->bounds.hi.v[k]));
         r->enorm = triangle_edge_norm(s->tri_edge_exp_max);

@@ -99,8 +99,8 @@ struct bsp_scene {
     double hit_tol;    /* ISECT_HIT_TOL_REL scales: the kernels' hit check */
     triangle_reach tri_reach; /* the live triangles' (isect_ray.tri_bound): from the
                                  bounds and 2^tri_edge_exp_max */
-    int tri_edge_exp_max; /* the largest triangle_edge_exp of a triangle added */
-    int has_triangles;
+    int tri_edge_exp_max; /* the largest triangle_edge_exp of a triangle added
+                             (TRIANGLE_EDGE_EXP_NONE: none) */
 
     char *warnings[SCENE_MAX_WARNINGS];
     size_t nwarnings;
