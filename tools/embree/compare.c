@@ -91,7 +91,9 @@ static const char usage[] =
     "                 kernels' answers\n"
     "  --help         this text\n"
     "\n"
-    "Prints a Markdown table (progress on stderr). Exit status 1 on bad arguments or\n"
+    "Prints a Markdown table (progress on stderr); its last column gives bspray's\n"
+    "traversal steps, cells traversed, empty cells and intersection tests per ray\n"
+    "(N_TS / N_ETS / N_EETS / N_IT) of the row's rays. Exit status 1 on bad arguments or\n"
     "a scene that cannot be loaded, 2 when a scene's rays disagree on more than 1%.\n";
 
 typedef struct options {
@@ -905,6 +907,7 @@ static agreement compare_rays(const embree_scene *es, const struct RTCRay *erays
                               const bsp_accel *accel, bsp_query *q, const ray_list *rl)
 {
     agreement a = {rl->n, 0, 0, 0, 0};
+    bsp_query_reset_counters(q); /* bspray's figures of these rays: run_scene reads them */
     if (rl->cls == BSP_RAY_SHADOW) {
         for (size_t i = 0; i < rl->n; i++)
             a.hit_miss += embree_blocked(es->scene, &erays[i]) !=
@@ -942,6 +945,7 @@ typedef struct result {
                                         that round (both on the same slices, so the same machine) */
     double build_embree, build_bspray; /* seconds */
     agreement agree;
+    bsp_query_counters counts; /* bspray's, over these rays (compare_rays' pass) */
     size_t ear_clipped, forced_ears;
 } result;
 
@@ -1041,6 +1045,7 @@ static int time_by_outcome(const options *o, const embree_scene *es, const bsp_a
             r[n].part = o->shadow ? shadow_names[k] : names[k];
             r[n].rays = part[k].n;
             r[n].agree = compare_rays(es, erays, accel, q, &part[k]);
+            r[n].counts = *bsp_query_get_counters(q);
             time_rounds(o, es, erays, accel, q, &part[k], &r[n]);
             free(erays);
             n++;
@@ -1091,6 +1096,7 @@ static int run_scene(const options *o, RTCDevice dev, const char *name, result r
         fprintf(stderr, "%s: %s: %zu %s rays; checking agreement\n", prog, name, rl.n,
                 o->shadow ? "shadow" : "primary");
         r->agree = compare_rays(&es, erays, accel, q, &rl);
+        r->counts = *bsp_query_get_counters(q);
         time_rounds(o, &es, erays, accel, q, &rl, r);
         free(erays);
         *nrows = 1 + (o->by_outcome ? time_by_outcome(o, &es, accel, q, &rl, r, r + 1) : 0);
@@ -1131,19 +1137,29 @@ static void print_header(RTCDevice dev, const options *o)
         printf("The rays in %d x %d tiles of the image, each row by row (--pixel-order tiles).\n\n",
                BSP_RENDER_TILE, BSP_RENDER_TILE);
     printf("| scene | prims | Embree tris / user | rays | Embree Mrays/s | bspray Mrays/s "
-           "| bspray/Embree | median round ratio | agree %% | build ms Embree / bspray |\n");
-    printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+           "| bspray/Embree | median round ratio | agree %% | build ms Embree / bspray "
+           "| bspray N_TS / N_ETS / N_EETS / N_IT |\n");
+    printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+}
+
+/* C's figure NUM per query (0 without queries). */
+static double per_ray(const bsp_query_counters *c, uint64_t num)
+{
+    return c->rays ? (double)num / (double)c->rays : 0.0;
 }
 
 static void print_row(const result *r)
 {
     int whole = !strcmp(r->part, "all");
-    printf(
-        "| %s%s%s%s | %zu | %zu / %zu | %zu | %.3f | %.3f | %.2f | %.3f | %.3f | %.0f / %.0f |\n",
-        r->scene, whole ? "" : " [", whole ? "" : r->part, whole ? "" : "]", r->nprims, r->tris,
-        r->users, r->rays, r->rate_embree, r->rate_bspray,
-        r->rate_embree > 0.0 ? r->rate_bspray / r->rate_embree : 0.0, r->ratio_median,
-        agree_pct(&r->agree), 1e3 * r->build_embree, 1e3 * r->build_bspray);
+    const bsp_query_counters *c = &r->counts;
+    printf("| %s%s%s%s | %zu | %zu / %zu | %zu | %.3f | %.3f | %.2f | %.3f | %.3f | %.0f / %.0f "
+           "| %.2f / %.2f / %.2f / %.2f |\n",
+           r->scene, whole ? "" : " [", whole ? "" : r->part, whole ? "" : "]", r->nprims, r->tris,
+           r->users, r->rays, r->rate_embree, r->rate_bspray,
+           r->rate_embree > 0.0 ? r->rate_bspray / r->rate_embree : 0.0, r->ratio_median,
+           agree_pct(&r->agree), 1e3 * r->build_embree, 1e3 * r->build_bspray,
+           per_ray(c, c->traversal_steps), per_ray(c, c->leaves_visited),
+           per_ray(c, c->empty_leaves), per_ray(c, c->isect_tests));
     fflush(stdout);
 }
 
@@ -1151,19 +1167,23 @@ static const char csv_header[] =
     "scene,prims,embree_triangles,embree_user_prims,ear_clipped_polygons,rays,"
     "embree_mrays_s,bspray_mrays_s,ratio_bspray_embree,agree_pct,disagree_hit_miss,"
     "disagree_t,same_t_other_prim,build_ms_embree,build_ms_bspray,res,rounds,threads,"
-    "ratio_median_round,rays_part,shots,pixel_order,ray_class\n";
+    "ratio_median_round,rays_part,shots,pixel_order,ray_class,bspray_n_ts,bspray_n_ets,"
+    "bspray_n_eets,bspray_n_it\n";
 
 static void csv_row(FILE *f, const result *r, const options *o)
 {
     fprintf(f,
             "%s,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,"
-            "%.3f,%.3f,%d,%d,%d,%.4f,%s,%d,%s,%s\n",
+            "%.3f,%.3f,%d,%d,%d,%.4f,%s,%d,%s,%s,%.4f,%.4f,%.4f,%.4f\n",
             r->scene, r->nprims, r->tris, r->users, r->ear_clipped, r->rays, r->rate_embree,
             r->rate_bspray, r->rate_embree > 0.0 ? r->rate_bspray / r->rate_embree : 0.0,
             agree_pct(&r->agree), r->agree.hit_miss, r->agree.t_differs, r->agree.other_prim,
             1e3 * r->build_embree, 1e3 * r->build_bspray, o->res, o->rounds, o->threads,
             r->ratio_median, r->part, o->shots, o->order == BSP_PIXELS_TILES ? "tiles" : "rows",
-            o->shadow ? "shadow" : "primary");
+            o->shadow ? "shadow" : "primary", per_ray(&r->counts, r->counts.traversal_steps),
+            per_ray(&r->counts, r->counts.leaves_visited),
+            per_ray(&r->counts, r->counts.empty_leaves),
+            per_ray(&r->counts, r->counts.isect_tests));
     fflush(f);
 }
 
