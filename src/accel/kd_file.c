@@ -516,6 +516,7 @@ bsp_status bsp_accel_load(const bsp_scene *scene, const char *path, bsp_accel **
     file_header fh;
     read_header(h, &fh);
     bsp_status st = BSP_OK;
+    const uint64_t fingerprint = scene_fingerprint(scene); /* a pass over the scene: once */
     /* the counts must account for the file's size exactly; each is first
      * bounded so that the sum cannot overflow */
     uint64_t want = fh.nnodes < KD_MAX_NODES && fh.nrefs <= UINT32_MAX
@@ -532,20 +533,18 @@ bsp_status bsp_accel_load(const bsp_scene *scene, const char *path, bsp_accel **
     else if (!header_options_valid(&fh))
         st = error_set(err, BSP_ERR_PARSE, path, 0, "damaged: its build options are invalid");
     else if (fh.nprims_scene == (uint64_t)bsp_scene_prim_count(scene) &&
-             fh.fingerprint != scene_fingerprint(scene) &&
-             fh.fingerprint == scene_fingerprint_of(scene, 1))
+             fh.fingerprint != fingerprint && fh.fingerprint == scene_fingerprint_of(scene, 1))
         st = error_set(err, BSP_ERR_INVALID, path, 0,
                        "was saved for this scene by bspray 0.2.0 or older, which read its "
                        "triangles' vertices rounded (v0 + (v1 - v0)); this version keeps them "
                        "exact, and its trees differ: build the tree again");
     else if (fh.nprims_scene != (uint64_t)bsp_scene_prim_count(scene) ||
-             fh.fingerprint != scene_fingerprint(scene))
+             fh.fingerprint != fingerprint)
         st = error_set(err, BSP_ERR_INVALID, path, 0,
                        "was saved for another scene (%llu primitives, fingerprint %016llx); "
                        "this one has %zu primitives, fingerprint %016llx",
                        (unsigned long long)fh.nprims_scene, (unsigned long long)fh.fingerprint,
-                       bsp_scene_prim_count(scene),
-                       (unsigned long long)scene_fingerprint(scene));
+                       bsp_scene_prim_count(scene), (unsigned long long)fingerprint);
     if (st != BSP_OK) {
         fclose(f);
         return st;
