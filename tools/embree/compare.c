@@ -899,20 +899,22 @@ static double bspray_pass(const bsp_accel *accel, bsp_query *q, const ray_list *
 
 typedef struct agreement {
     size_t rays, disagree, hit_miss, t_differs, other_prim;
+    bsp_query_counters counts; /* bspray's figures over these rays */
 } agreement;
 
 /* Shoots every ray through both (untimed) and compares hit/miss and t
- * (shadow rays: blocked or not). */
+ * (shadow rays: blocked or not); counts bspray's figures of the rays. */
 static agreement compare_rays(const embree_scene *es, const struct RTCRay *erays,
                               const bsp_accel *accel, bsp_query *q, const ray_list *rl)
 {
-    agreement a = {rl->n, 0, 0, 0, 0};
-    bsp_query_reset_counters(q); /* bspray's figures of these rays: run_scene reads them */
+    agreement a = {rl->n, 0, 0, 0, 0, {0}};
+    bsp_query_reset_counters(q);
     if (rl->cls == BSP_RAY_SHADOW) {
         for (size_t i = 0; i < rl->n; i++)
             a.hit_miss += embree_blocked(es->scene, &erays[i]) !=
                           bsp_occluded_from(accel, q, &rl->rays[i], rl->from[i]);
         a.disagree = a.hit_miss;
+        a.counts = *bsp_query_get_counters(q);
         return a;
     }
     for (size_t i = 0; i < rl->n; i++) {
@@ -930,6 +932,7 @@ static agreement compare_rays(const embree_scene *es, const struct RTCRay *erays
         }
     }
     a.disagree = a.hit_miss + a.t_differs;
+    a.counts = *bsp_query_get_counters(q);
     return a;
 }
 
@@ -944,8 +947,7 @@ typedef struct result {
     double ratio_median;             /* the median over the rounds of bspray's rate over Embree's in
                                         that round (both on the same slices, so the same machine) */
     double build_embree, build_bspray; /* seconds */
-    agreement agree;
-    bsp_query_counters counts; /* bspray's, over these rays (compare_rays' pass) */
+    agreement agree; /* with bspray's figures of the rays (compare_rays' pass) */
     size_t ear_clipped, forced_ears;
 } result;
 
@@ -1045,7 +1047,6 @@ static int time_by_outcome(const options *o, const embree_scene *es, const bsp_a
             r[n].part = o->shadow ? shadow_names[k] : names[k];
             r[n].rays = part[k].n;
             r[n].agree = compare_rays(es, erays, accel, q, &part[k]);
-            r[n].counts = *bsp_query_get_counters(q);
             time_rounds(o, es, erays, accel, q, &part[k], &r[n]);
             free(erays);
             n++;
@@ -1096,7 +1097,6 @@ static int run_scene(const options *o, RTCDevice dev, const char *name, result r
         fprintf(stderr, "%s: %s: %zu %s rays; checking agreement\n", prog, name, rl.n,
                 o->shadow ? "shadow" : "primary");
         r->agree = compare_rays(&es, erays, accel, q, &rl);
-        r->counts = *bsp_query_get_counters(q);
         time_rounds(o, &es, erays, accel, q, &rl, r);
         free(erays);
         *nrows = 1 + (o->by_outcome ? time_by_outcome(o, &es, accel, q, &rl, r, r + 1) : 0);
@@ -1151,7 +1151,7 @@ static double per_ray(const bsp_query_counters *c, uint64_t num)
 static void print_row(const result *r)
 {
     int whole = !strcmp(r->part, "all");
-    const bsp_query_counters *c = &r->counts;
+    const bsp_query_counters *c = &r->agree.counts;
     printf("| %s%s%s%s | %zu | %zu / %zu | %zu | %.3f | %.3f | %.2f | %.3f | %.3f | %.0f / %.0f "
            "| %.2f / %.2f / %.2f / %.2f |\n",
            r->scene, whole ? "" : " [", whole ? "" : r->part, whole ? "" : "]", r->nprims, r->tris,
@@ -1172,6 +1172,7 @@ static const char csv_header[] =
 
 static void csv_row(FILE *f, const result *r, const options *o)
 {
+    const bsp_query_counters *c = &r->agree.counts;
     fprintf(f,
             "%s,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,"
             "%.3f,%.3f,%d,%d,%d,%.4f,%s,%d,%s,%s,%.4f,%.4f,%.4f,%.4f\n",
@@ -1180,10 +1181,9 @@ static void csv_row(FILE *f, const result *r, const options *o)
             agree_pct(&r->agree), r->agree.hit_miss, r->agree.t_differs, r->agree.other_prim,
             1e3 * r->build_embree, 1e3 * r->build_bspray, o->res, o->rounds, o->threads,
             r->ratio_median, r->part, o->shots, o->order == BSP_PIXELS_TILES ? "tiles" : "rows",
-            o->shadow ? "shadow" : "primary", per_ray(&r->counts, r->counts.traversal_steps),
-            per_ray(&r->counts, r->counts.leaves_visited),
-            per_ray(&r->counts, r->counts.empty_leaves),
-            per_ray(&r->counts, r->counts.isect_tests));
+            o->shadow ? "shadow" : "primary", per_ray(c, c->traversal_steps),
+            per_ray(c, c->leaves_visited), per_ray(c, c->empty_leaves),
+            per_ray(c, c->isect_tests));
     fflush(f);
 }
 
