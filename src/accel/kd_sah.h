@@ -15,6 +15,7 @@
 #include "accel/kd_clip.h"
 #include "accel/kd_cost.h"
 #include "accel/kd_tree.h"
+#include "accel/kd_view.h"
 #include "util/bigmem.h"
 
 
@@ -186,6 +187,8 @@ typedef struct sah_build {
     void *progress_ctx;
     void *mruns;        /* kd_sweep_measure's scratch (runs, positions), grown on demand */
     size_t mruns_cap;
+    kd_view_cell vcell; /* sah-per, sah-par: the cell part of its children's measures, kept
+                           from one axis's sweep to the next (kd_view_split.c) */
 } sah_build;
 
 static inline int grow_u64(uint64_t **p, size_t *cap, size_t need)

@@ -34,6 +34,8 @@ typedef struct msweep {
     kd_area_fn area;
     const void *actx;
     bsp_box lb, rb; /* the cell, for the children at a position */
+    int split_fast; /* the children are measured by SPLIT (sah-per, sah-par: kd_view_split.c) */
+    kd_view_split split;
 } msweep;
 
 /* The sweep state before an event: counts and cost sums of both sides. */
@@ -68,6 +70,7 @@ static void msweep_init(msweep *s, sah_build *b, const uint64_t *e, unsigned k,
     s->actx = b->actx;
     s->lb = *cell;
     s->rb = *cell;
+    s->split_fast = 0; /* sweep_axis decides, once it has candidates */
 }
 
 /* Moves the state past the event X (END part, then START part). */
@@ -91,6 +94,8 @@ static inline __attribute__((always_inline)) double left_measure(msweep *s, doub
     if (surface)
         return s->cross + (p - s->lo) * s->perim; /* half areas: the factor 2 is in inv_area */
     s->lb.hi.v[s->k] = p;
+    if (s->split_fast)
+        return kd_view_split_left(&s->split, &s->lb, p);
     return s->area(&s->lb, s->actx);
 }
 
@@ -100,6 +105,8 @@ static inline __attribute__((always_inline)) double right_measure(msweep *s, dou
     if (surface)
         return s->cross + (s->hi - p) * s->perim;
     s->rb.lo.v[s->k] = p;
+    if (s->split_fast)
+        return kd_view_split_right(&s->split, &s->rb, p);
     return s->area(&s->rb, s->actx);
 }
 
@@ -529,6 +536,10 @@ sweep_axis(sah_build *b, const uint64_t *e, size_t m, unsigned k, const bsp_box 
         z--;
     if (z == i)
         return;
+    if (!surface && b->area == kd_view_area) {
+        kd_view_split_begin(&s.split, &b->vcell, b->actx, cell, k);
+        s.split_fast = 1;
+    }
     /* the measure's error bound, in cost units (see "Pruning"), and the
      * positions next to the eye, evaluated all */
     double zone[2] = {INFINITY, -INFINITY};

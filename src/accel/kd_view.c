@@ -29,6 +29,7 @@
 #include "accel/kd_cost.h"
 #include "accel/kd_prepass.h"
 #include "accel/kd_view.h"
+#include "accel/kd_view_faces.h"
 #include "bspray/render.h"
 #include "geom/vec.h"
 
@@ -208,14 +209,6 @@ static double clipped_area(const kd_view *v, pt2 *p, int n, pt2 *q)
     return n >= 3 ? polygon_area(p, n) : 0.0;
 }
 
-/* Corner indices of the face of axis K on side S (0 lo, 1 hi), in cyclic
- * order: c[0] = S << K, then with the bit of axis K+1, of both, of K+2. */
-static const unsigned char face_corners[3][2][4] = {
-    {{0, 2, 6, 4}, {1, 3, 7, 5}}, /* x: then y, z */
-    {{0, 4, 5, 1}, {2, 6, 7, 3}}, /* y: then z, x */
-    {{0, 1, 3, 2}, {4, 5, 7, 6}}, /* z: then x, y */
-};
-
 /* B + E0 + E1 + E2 for the 8 corners (bit k of C: E_k added, else 0.0),
  * summed left to right as written, sharing the partial sums. */
 static inline __attribute__((always_inline)) void corner_sums(double base, const double e[3],
@@ -231,20 +224,6 @@ static inline __attribute__((always_inline)) void corner_sums(double base, const
     out[5] = s10 + e[2];
     out[6] = s01 + e[2];
     out[7] = s11 + e[2];
-}
-
-/* The shoelace area of the quadrilateral of corners FC (projected to X, Y),
- * as polygon_area would sum it. */
-static inline double quad_area(const double *x, const double *y, const unsigned char fc[4])
-{
-    double x0 = x[fc[0]], y0 = y[fc[0]], x1 = x[fc[1]], y1 = y[fc[1]];
-    double x2 = x[fc[2]], y2 = y[fc[2]], x3 = x[fc[3]], y3 = y[fc[3]];
-    double a = 0.0;
-    a += x0 * y1 - x1 * y0;
-    a += x1 * y2 - x2 * y1;
-    a += x2 * y3 - x3 * y2;
-    a += x3 * y0 - x0 * y3;
-    return 0.5 * fabs(a);
 }
 
 /* The part in front of the start plane of a box straddling it: the hull of
@@ -349,9 +328,9 @@ double kd_view_area(const bsp_box *box, const void *ctx)
             side = v->eye.v[k] < box->lo.v[k] ? 0 : v->eye.v[k] > box->hi.v[k] ? 1 : -1;
         if (side < 0)
             continue;
-        const unsigned char *fc = face_corners[k][side];
+        const unsigned char *fc = kd_face_corners[k][side];
         if (inside) {
-            a += quad_area(px, py, fc);
+            a += kd_quad_area(px, py, fc);
         } else {
             pt2 quad[4 + 4], tmp[4 + 4];
             for (int i = 0; i < 4; i++)

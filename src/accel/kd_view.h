@@ -45,6 +45,50 @@ HIDDEN bsp_status kd_view_resolve(const bsp_scene *scene, const bsp_build_option
  * contains the eye (PER). CTX of kd_area_fn is a kd_view. */
 HIDDEN double kd_view_area(const bsp_box *box, const void *view);
 
+/* The view measure of the children of a cell's splits, for the SAH sweep
+ * (kd_view_split.c): the cell's corners are projected once for the sweeps
+ * of its three axes, and each plane's four corners once for both of its
+ * children. The cell's part, kept by a build thread from one axis's sweep
+ * to the next, keyed by the cell and the view: */
+typedef struct kd_view_cell {
+    const kd_view *view;
+    bsp_box box;
+    int state;           /* 0: not prepared yet; 1: accepted; -1: refused */
+    double rl[3][3], rh[3][3]; /* (lo_j - eye_j) and (hi_j - eye_j) times right, up, fwd's j */
+    double cx[8], cy[8]; /* the corners, projected (bit j of c: hi on axis j) */
+    signed char side[3]; /* the face seen on each axis (-1: none; PER: by the cell) */
+} kd_view_cell;
+/* ... and one axis's: */
+typedef struct kd_view_split {
+    kd_view_cell *vc;
+    unsigned k;                   /* the split axis */
+    int ready;                    /* the terms below are set */
+    int plane_ok;                 /* the plane at P lies in front (its corners are valid) */
+    double eye_k, lo_k, hi_k;     /* on the split axis */
+    double rk, uk, fk;            /* right, up and fwd on the split axis */
+    double sx[4], sy[4], sz[4];   /* a plane corner's terms of the other two axes */
+    unsigned nside;               /* the faces of the other axes the rays see: their */
+    const unsigned char (*side_src[2])[4]; /* corners by child (kd_view_split.c, face_src) */
+    double cell_face2[2];         /* twice the areas of the cell's lo and hi faces of the axis */
+    double vp_area;               /* the viewport's area, the most a measure can be */
+    double p;                     /* the plane whose corners px, py [8, 12) hold (NaN: none) */
+    double px[12], py[12];        /* the corners projected: the cell's corner c at c, the
+                                     plane's corner q at 8 + q (bit 0: the side of axis
+                                     k + 1, bit 1: of axis k + 2) */
+    double plane_face2;           /* twice the area of the plane's face */
+} kd_view_split;
+/* Starts the children's measures of CELL's splits on axis K under VIEW, with
+ * VC the build thread's cell part (prepared again when it holds another
+ * cell or view). Nothing is computed until a child is measured. */
+HIDDEN void kd_view_split_begin(kd_view_split *s, kd_view_cell *vc, const kd_view *view,
+                                const bsp_box *cell, unsigned k);
+/* The measures of the child below the plane at P (CHILD: the cell with hi
+ * on the split axis P) and of the child above it (the cell with lo P):
+ * kd_view_area's value within the error bound of kd_view_measure_noise.
+ * Where the cell does not lie wholly in front of the rays' start plane and
+ * inside the viewport, or (PER) contains the eye, kd_view_area of CHILD. */
+HIDDEN double kd_view_split_left(kd_view_split *s, const bsp_box *child, double p);
+HIDDEN double kd_view_split_right(kd_view_split *s, const bsp_box *child, double p);
 /* sah-mixed: the expected share of all the render's rays that cross a box,
  * w * A_view(B) / A_viewport + (1 - w) * P_other(B), w the share of primary
  * rays: primary rays are counted by the projected area, every other ray
