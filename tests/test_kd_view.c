@@ -488,14 +488,15 @@ static void full_sweep(const sah_build *b, const uint64_t *e, size_t m, unsigned
     const double anode = 1.0 / inv_area, mb_hit = b->mb_hit;
     const double unif_save = b->unif > mb_hit ? 1.0 - mb_hit / b->unif : 0.0;
     bsp_box lb = *cell, rb = *cell;
-    /* the children's measures as the sweep takes them (kd_view_split for
-     * sah-per and sah-par; its agreement with kd_view_area is checked above) */
+    /* the children's measures as the sweep takes them (their view terms from
+     * kd_view_split; its agreement with kd_view_area is checked above) */
     kd_view_cell vc;
     kd_view_split sp;
     memset(&vc, 0, sizeof vc);
-    const int split = b->area == kd_view_area;
+    const kd_mixed_measure *mixed = b->area == kd_mixed_area ? b->actx : NULL;
+    const int split = b->area == kd_view_area || mixed;
     if (split)
-        kd_view_split_begin(&sp, &vc, b->actx, cell, k);
+        kd_view_split_begin(&sp, &vc, mixed ? &mixed->view : b->actx, cell, k);
     double tl = 0.0, tr = tsum, best_cost = best->cost;
     size_t nl = 0, nr = n, best_i = SIZE_MAX, i = 0;
     for (; i < m; i++) {
@@ -527,6 +528,10 @@ static void full_sweep(const sah_build *b, const uint64_t *e, size_t m, unsigned
         rb.lo.v[k] = p;
         double al = split ? kd_view_split_left(&sp, &lb, p) : b->area(&lb, b->actx);
         double ar = split ? kd_view_split_right(&sp, &rb, p) : b->area(&rb, b->actx), c;
+        if (mixed) {
+            al = kd_mixed_area_of_view(mixed, &lb, al);
+            ar = kd_mixed_area_of_view(mixed, &rb, ar);
+        }
         if (mailbox) {
             double ab = al + ar - anode;
             double ns = (double)(nl + nr - n);

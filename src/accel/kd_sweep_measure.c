@@ -34,8 +34,11 @@ typedef struct msweep {
     kd_area_fn area;
     const void *actx;
     bsp_box lb, rb; /* the cell, for the children at a position */
-    int split_fast; /* the children are measured by SPLIT (sah-per, sah-par: kd_view_split.c) */
+    /* sah-per, sah-par: the children's measures are SPLIT's (kd_view_split.c);
+     * sah-mixed: their view terms, in MIXED's measure */
+    int split_fast;
     kd_view_split split;
+    const kd_mixed_measure *mixed;
 } msweep;
 
 /* The sweep state before an event: counts and cost sums of both sides. */
@@ -71,6 +74,7 @@ static void msweep_init(msweep *s, sah_build *b, const uint64_t *e, unsigned k,
     s->lb = *cell;
     s->rb = *cell;
     s->split_fast = 0; /* sweep_axis decides, once it has candidates */
+    s->mixed = NULL;
 }
 
 /* Moves the state past the event X (END part, then START part). */
@@ -94,8 +98,10 @@ static inline __attribute__((always_inline)) double left_measure(msweep *s, doub
     if (surface)
         return s->cross + (p - s->lo) * s->perim; /* half areas: the factor 2 is in inv_area */
     s->lb.hi.v[s->k] = p;
-    if (s->split_fast)
-        return kd_view_split_left(&s->split, &s->lb, p);
+    if (s->split_fast) {
+        double v = kd_view_split_left(&s->split, &s->lb, p);
+        return s->mixed ? kd_mixed_area_of_view(s->mixed, &s->lb, v) : v;
+    }
     return s->area(&s->lb, s->actx);
 }
 
@@ -105,8 +111,10 @@ static inline __attribute__((always_inline)) double right_measure(msweep *s, dou
     if (surface)
         return s->cross + (s->hi - p) * s->perim;
     s->rb.lo.v[s->k] = p;
-    if (s->split_fast)
-        return kd_view_split_right(&s->split, &s->rb, p);
+    if (s->split_fast) {
+        double v = kd_view_split_right(&s->split, &s->rb, p);
+        return s->mixed ? kd_mixed_area_of_view(s->mixed, &s->rb, v) : v;
+    }
     return s->area(&s->rb, s->actx);
 }
 
@@ -536,8 +544,9 @@ sweep_axis(sah_build *b, const uint64_t *e, size_t m, unsigned k, const bsp_box 
         z--;
     if (z == i)
         return;
-    if (!surface && b->area == kd_view_area) {
-        kd_view_split_begin(&s.split, &b->vcell, b->actx, cell, k);
+    if (!surface && (b->area == kd_view_area || b->area == kd_mixed_area)) {
+        s.mixed = b->area == kd_mixed_area ? b->actx : NULL;
+        kd_view_split_begin(&s.split, &b->vcell, s.mixed ? &s.mixed->view : b->actx, cell, k);
         s.split_fast = 1;
     }
     /* the measure's error bound, in cost units (see "Pruning"), and the

@@ -347,7 +347,12 @@ double kd_view_area(const bsp_box *box, const void *ctx)
 double kd_mixed_area(const bsp_box *box, const void *ctx)
 {
     const kd_mixed_measure *m = ctx;
-    double a = m->w_view * kd_view_area(box, &m->view) + m->w_surf * kd_surface_area(box);
+    return kd_mixed_area_of_view(m, box, kd_view_area(box, &m->view));
+}
+
+double kd_mixed_area_of_view(const kd_mixed_measure *m, const bsp_box *box, double view_area)
+{
+    double a = m->w_view * view_area + m->w_surf * kd_surface_area(box);
     if (m->w_count > 0.0)
         a += m->w_count * kd_raycount_measure(m->count, box);
     return m->w_flux > 0.0 ? a + m->w_flux * kd_flux_measure(m->flux, box) : a;

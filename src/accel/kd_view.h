@@ -111,6 +111,10 @@ typedef struct kd_mixed_measure {
 
 /* The mixed measure of BOX; CTX is a kd_mixed_measure. */
 HIDDEN double kd_mixed_area(const bsp_box *box, const void *mixed);
+/* The same with VIEW_AREA for kd_view_area's value of BOX under M's view
+ * (the sweep's children take theirs from kd_view_split). */
+HIDDEN double kd_mixed_area_of_view(const kd_mixed_measure *m, const bsp_box *box,
+                                    double view_area);
 
 /* A bound on the rounding error of MEASURE (kd_view_area or kd_mixed_area;
  * CTX its context) on the children of CELL
