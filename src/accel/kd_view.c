@@ -260,8 +260,7 @@ double kd_view_area(const bsp_box *box, const void *ctx)
     const kd_view *v = ctx;
     const double vp_area = 4.0 * v->hx * v->hy;
     const int ortho = v->ortho;
-    if (!ortho && v->eye.x >= box->lo.x && v->eye.x <= box->hi.x && v->eye.y >= box->lo.y &&
-        v->eye.y <= box->hi.y && v->eye.z >= box->lo.z && v->eye.z <= box->hi.z)
+    if (!ortho && kd_view_eye_in(v, box))
         return vp_area; /* seen from inside: every ray crosses it */
 
     /* corners in the view frame: (across, up, depth); corner c has bit k
@@ -318,14 +317,8 @@ double kd_view_area(const bsp_box *box, const void *ctx)
         inside &= (fabs(px[c]) <= v->hx) & (fabs(py[c]) <= v->hy);
     double a = 0.0;
     for (int k = 0; k < 3; k++) {
-        /* PER: the face is seen when the eye is outside its plane (on one
-         * side of an axis at most); PAR: when the rays run against its
-         * outward normal */
-        int side;
-        if (ortho)
-            side = v->fwd.v[k] > 0.0 ? 0 : v->fwd.v[k] < 0.0 ? 1 : -1;
-        else
-            side = v->eye.v[k] < box->lo.v[k] ? 0 : v->eye.v[k] > box->hi.v[k] ? 1 : -1;
+        /* the faces turned towards the rays (at most one per axis) */
+        int side = kd_view_face_seen(v, (unsigned)k, box->lo.v[k], box->hi.v[k]);
         if (side < 0)
             continue;
         const unsigned char *fc = kd_face_corners[k][side];

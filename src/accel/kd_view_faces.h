@@ -10,6 +10,8 @@
 
 #include <math.h>
 
+#include "accel/kd_view.h"
+
 /* Corner indices of the face of axis K on side S (0 lo, 1 hi), in cyclic
  * order: c[0] = S << K, then with the bit of axis K+1, of both, of K+2. */
 static const unsigned char kd_face_corners[3][2][4] = {
@@ -30,6 +32,24 @@ static inline double kd_quad_area(const double *x, const double *y, const unsign
     a += x2 * y3 - x3 * y2;
     a += x3 * y0 - x0 * y3;
     return 0.5 * fabs(a);
+}
+
+/* Whether the eye of the PER view V lies in the closed BOX (every ray of
+ * the view then crosses it). */
+static inline int kd_view_eye_in(const kd_view *v, const bsp_box *box)
+{
+    return v->eye.x >= box->lo.x && v->eye.x <= box->hi.x && v->eye.y >= box->lo.y &&
+           v->eye.y <= box->hi.y && v->eye.z >= box->lo.z && v->eye.z <= box->hi.z;
+}
+
+/* The face of axis K that the rays of V see on a box spanning [LO, HI] on
+ * that axis: 0 the lo face, 1 the hi face, -1 none. PER: the face whose
+ * plane has the eye outside it; PAR: the face the rays run against. */
+static inline int kd_view_face_seen(const kd_view *v, unsigned k, double lo, double hi)
+{
+    if (v->ortho)
+        return v->fwd.v[k] > 0.0 ? 0 : v->fwd.v[k] < 0.0 ? 1 : -1;
+    return v->eye.v[k] < lo ? 0 : v->eye.v[k] > hi ? 1 : -1;
 }
 
 #endif /* BSPRAY_ACCEL_KD_VIEW_FACES_H */

@@ -59,7 +59,7 @@ static inline double quad2(double ax, double ay, double bx, double by, double cx
 void kd_view_split_begin(kd_view_split *s, kd_view_cell *vc, const kd_view *view,
                          const bsp_box *cell, unsigned k)
 {
-    if (vc->view != view || vc->state == 0 || memcmp(&vc->box, cell, sizeof *cell) != 0) {
+    if (vc->view != view || memcmp(&vc->box, cell, sizeof *cell) != 0) {
         vc->view = view;
         vc->box = *cell;
         vc->state = 0;
@@ -75,8 +75,7 @@ static int prepare_cell(kd_view_cell *vc)
     const kd_view *v = vc->view;
     const bsp_box *b = &vc->box;
     const int ortho = v->ortho;
-    if (!ortho && v->eye.x >= b->lo.x && v->eye.x <= b->hi.x && v->eye.y >= b->lo.y &&
-        v->eye.y <= b->hi.y && v->eye.z >= b->lo.z && v->eye.z <= b->hi.z)
+    if (!ortho && kd_view_eye_in(v, b))
         return 0; /* the eye inside: the whole viewport */
     const bsp_vec3 *f[3] = {&v->right, &v->up, &v->fwd};
     double ext = 0.0;
@@ -88,10 +87,7 @@ static int prepare_cell(kd_view_cell *vc)
         }
         double w = b->hi.v[j] - b->lo.v[j];
         ext = w > ext ? w : ext;
-        if (ortho)
-            vc->side[j] = v->fwd.v[j] > 0.0 ? 0 : v->fwd.v[j] < 0.0 ? 1 : -1;
-        else
-            vc->side[j] = v->eye.v[j] < b->lo.v[j] ? 0 : v->eye.v[j] > b->hi.v[j] ? 1 : -1;
+        vc->side[j] = (signed char)kd_view_face_seen(v, j, b->lo.v[j], b->hi.v[j]);
     }
     const double min_depth = ortho ? 0.0 : SPLIT_MIN_DEPTH * ext;
     int ok = 1;
@@ -212,15 +208,6 @@ static double child_area(const kd_view_split *s, unsigned hi, int side_k)
     return a < s->vp_area ? a : s->vp_area;
 }
 
-/* The face of the split axis a child [lo, hi] shows (PER: by the eye's
- * side; PAR: by the rays' direction, as every face). */
-static int split_side(const kd_view_split *s, double lo, double hi)
-{
-    if (s->vc->view->ortho)
-        return s->vc->side[s->k];
-    return s->eye_k < lo ? 0 : s->eye_k > hi ? 1 : -1;
-}
-
 /* The measure of CHILD, the child of the plane at P on side HI (1: above). */
 static double child_measure(kd_view_split *s, const bsp_box *child, double p, unsigned hi)
 {
@@ -229,7 +216,9 @@ static double child_measure(kd_view_split *s, const bsp_box *child, double p, un
     plane_corners(s, p);
     if (!s->plane_ok)
         return kd_view_area(child, s->vc->view);
-    return child_area(s, hi, hi ? split_side(s, p, s->hi_k) : split_side(s, s->lo_k, p));
+    const kd_view *v = s->vc->view;
+    return child_area(s, hi, hi ? kd_view_face_seen(v, s->k, p, s->hi_k)
+                                : kd_view_face_seen(v, s->k, s->lo_k, p));
 }
 
 double kd_view_split_left(kd_view_split *s, const bsp_box *child, double p)
