@@ -737,11 +737,12 @@ TEST(sah_leaf_budget_prunes_to_the_budget)
 }
 
 /* The leaf budget's estimate (kd_prune_estimate, kd_sah_tasks.c): the build
- * that skips the splits below the estimate's cut makes the very tree of the
- * build that makes every split and then prunes, on every thread count —
- * on scenes where the estimate does cut (budget_cut > 0); a cut too high
- * is found out and the tree built again. Fails when the cut also applies
- * below a speculative split (shells). */
+ * that skips the splits below the estimate's cut, and its probes those below
+ * the smaller cut of its scouts' estimate, makes the very tree of the build
+ * that makes every split and then prunes, on every thread count — on scenes
+ * where the estimates do cut (budget_cut > 0; budget_probe_cut > 0 on mount
+ * and gears); a cut too high is found out and the tree built again. Fails
+ * when the cut also applies below a speculative split (shells). */
 TEST(sah_leaf_budget_estimate_builds_the_same_tree)
 {
     /* shells: bad refines, whose subtrees the estimate must leave alone */
@@ -765,6 +766,10 @@ TEST(sah_leaf_budget_estimate_builds_the_same_tree)
         CHECK_MSG(tw->budget_cut == -INFINITY && t0->budget_cut > 0.0 && !t0->budget_rebuilt,
                   "%s: the estimate did not cut (cut %g, rebuilt %d)", scenes[i], t0->budget_cut,
                   t0->budget_rebuilt);
+        /* (shells' few tasks make too few scouts for an estimate of their own) */
+        CHECK_MSG(i == 2 || (t0->budget_probe_cut > 0.0 && t0->budget_probe_cut < t0->budget_cut),
+                  "%s: the scouts' estimate did not cut the probes (cut %g, probes' %g)",
+                  scenes[i], t0->budget_cut, t0->budget_probe_cut);
         CHECK_MSG(same_tree(tw, t0), "%s: the tree with the estimate differs", scenes[i]);
         CHECK_MSG(same_tree(t0, t1) && t0->budget_cut == t1->budget_cut,
                   "%s: 1 and 3 threads build different trees", scenes[i]);

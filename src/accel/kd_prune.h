@@ -30,14 +30,22 @@ typedef struct kd_budget_part {
     const kd_tree *sub;
 } kd_budget_part;
 
-/* The estimate's sample: every KD_BUDGET_PROBE_EVERY-th subtree built by a
- * task of the SAH builder (kd_sah_tasks.c), in task order, and no estimate
- * from fewer than KD_BUDGET_MIN_PROBES; the other subtrees are built
- * without the splits that save less than a share of the
- * estimate (kd_cost_model.budget_cut; docs/kdtree.md: how far the
- * estimates err). */
+/* The estimate's sample: one in KD_BUDGET_PROBE_EVERY of the subtrees
+ * built by tasks of the SAH builder (kd_sah_tasks.c), and no estimate from
+ * fewer than KD_BUDGET_MIN_PROBES; the other subtrees are built without the
+ * splits that save less than a share of the estimate
+ * (kd_cost_model.budget_cut; docs/kdtree.md: how far the estimates err).
+ * One probe in KD_BUDGET_SCOUT_EVERY is a scout, built in full before the
+ * others; from at least KD_BUDGET_MIN_SCOUTS scouts a first estimate, and
+ * the other probes are built without the splits that save less than
+ * KD_BUDGET_SCOUT_SHARE of it (their counts above that are exact, and
+ * the estimate lies far above it). Estimates (of all probes, and of each
+ * half) further apart than KD_BUDGET_SPREAD times are not trusted. */
 #define KD_BUDGET_PROBE_EVERY 8
 #define KD_BUDGET_MIN_PROBES 4
+#define KD_BUDGET_SCOUT_EVERY 3
+#define KD_BUDGET_MIN_SCOUTS 2
+#define KD_BUDGET_SCOUT_SHARE 0.25
 #define KD_BUDGET_SPREAD 4.0
 
 /* Estimates the threshold kd_prune_to_leaves will find for MAX_LEAVES

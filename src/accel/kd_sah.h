@@ -112,15 +112,23 @@ typedef struct sah_tasks {
                             so every thread count builds the same array) */
     sah_pool *pool;      /* the workers (NULL: the tasks wait for kd_sah_finish_tasks) */
     /* The leaf budget's estimate (kd_prune_estimate): with probe_every > 0,
-     * tasks number 0, K, 2K, ... (K = probe_every) are built first, in full;
-     * from them and the top of the tree the budget's threshold is estimated,
-     * and the other tasks are built with a least saving of raised (splits
-     * below it would be pruned anyway). 0: no estimate, every task in full. */
+     * one task in probe_every (drawn by a hash of its number) is a probe,
+     * built before the others; from the probes and the top of the tree the
+     * budget's threshold is estimated, and the other tasks are built with a
+     * least saving of cut_share times it (splits below it would be pruned
+     * anyway). One probe in KD_BUDGET_SCOUT_EVERY is a scout, built first
+     * and in full: from the scouts alone a first, cautious estimate, and the
+     * other probes are built with a least saving of a small share of it
+     * (kd_sah_tasks.c). 0: no estimate, every task in full. */
     size_t probe_every;
+    size_t nprobes;      /* probes listed so far (which of them are scouts) */
     size_t budget;       /* the leaf budget the estimate is for */
     double cut_share;    /* the share of the estimate the other tasks cut at */
-    double raised;       /* out: the least saving the other tasks were built with
-                            (-inf: none; b->min_saving applied as ever) */
+    double raised;       /* out: the greatest least saving any task was built with
+                            above the build's (-inf: none; b->min_saving applied as
+                            ever): the cut the prune must prove harmless */
+    double probe_cut;    /* out: the least saving the probes were built with, from the
+                            scouts' estimate (-inf: none) */
     double n_done, n_all; /* the primitives of the tasks built, and of all (progress) */
 } sah_tasks;
 

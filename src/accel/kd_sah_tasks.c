@@ -11,18 +11,20 @@
  * are deferred, each with scratch of its own (the per-primitive bounds,
  * costs and classes are shared read-only); when the main build is done, its
  * thread joins them. With a leaf budget's estimate (sah_tasks.probe_every)
- * the sampled tasks ("probes") go first; once the main build is done and
- * the probes are built, the calling thread makes the estimate
- * (raise_least_saving), and the tasks not yet taken are built with its
- * raised least saving. The subtrees are then appended to the main array in
- * task order, their child and leaf indices rebased. Which nodes become tasks
- * depends only on the scene, so every thread count builds the very same node
- * array: within a task, and in the top part, nodes are in depth-first order;
- * children stay adjacent everywhere.
+ * the sampled tasks go first, scouts before probes; once the main build is
+ * done and the scouts are built, the calling thread makes a first estimate
+ * from them, and the probes not yet taken are built with a small share of
+ * it as their least saving; once the probes are built too, the estimate
+ * from the whole sample, and the tasks not yet taken are built with its
+ * raised least saving (estimate_and_cut). The subtrees are then appended
+ * to the main array in task order, their child and leaf indices rebased.
+ * Which nodes become tasks depends only on the scene, so every thread count
+ * builds the very same node array: within a task, and in the top part,
+ * nodes are in depth-first order; children stay adjacent everywhere.
  *
  * Shared between the threads, under the pool's lock: the task list (count,
  * the array of task pointers, which the main build grows) and the pool's
- * cursor and flags. A task itself belongs to the main build until it is
+ * cursors, counts and flags. A task itself belongs to the main build until it is
  * listed, then to the one worker that takes it, then, after the join, to the
  * main thread again.
  */
@@ -40,21 +42,31 @@ struct sah_task {
     int depth, surface;
     uint64_t *ev;  /* its three lists (axis k at k * 2n), then room to grow */
     kd_tree sub;   /* its subtree, root at 0 */
-    int probe;     /* built first, for the leaf budget's estimate (sah_tasks.probe_every) */
+    int kind;      /* TASK_SCOUT, TASK_PROBE (the leaf budget's sample, built first:
+                      sah_tasks.probe_every) or TASK_OTHER */
     double min_saving_sure; /* > the build's: its raised least saving (sah_build) */
     bsp_status st;
     bsp_error err;
 };
 
+/* The kinds of task, in the order the threads take them. A scout is built
+ * in full; a probe, once the scouts' estimate is made, without the splits
+ * that save less than a small share of it; the others, once the estimate
+ * of the whole sample is made, without those that save less than
+ * cut_share of it. A task taken before its estimate is made (while the
+ * main build is still listing tasks) is built in full. */
+enum { TASK_SCOUT, TASK_PROBE, TASK_OTHER, TASK_KINDS };
+
 struct sah_pool {
     pthread_mutex_t lock;
     pthread_cond_t more; /* a task was listed, or the pool closed */
     sah_tasks *tasks;
-    size_t next;         /* the next task to take (not a probe) */
-    size_t next_probe;   /* where to look for the next probe to take */
-    size_t probes_taken, probes_done; /* probes taken by a thread, and built */
+    size_t next[TASK_KINDS];  /* per kind: where to look for the next task to take */
+    size_t taken[TASK_KINDS], built[TASK_KINDS]; /* per kind: tasks taken by a thread,
+                                                    and built */
+    int scouted;         /* the scouts' estimate is made (or none is wanted): probes may go */
     int estimated;       /* the estimate is made (or none is wanted): every task may go */
-    pthread_cond_t done; /* a probe was built */
+    pthread_cond_t done; /* a scout or a probe was built */
     int closed;          /* the main build is over: no task will be listed */
     int abort;           /* ... and it failed: build no more tasks */
     int started;         /* worker threads running */
@@ -80,6 +92,20 @@ static int is_probe(const sah_tasks *ts, size_t i)
     return ts->probe_every && h % ts->probe_every == 0;
 }
 
+/* The kind of task I: every KD_BUDGET_SCOUT_EVERY-th probe in task order
+ * (the probes' hash spreads them, so the scouts too) is a scout. */
+static int task_kind(sah_tasks *ts, size_t i)
+{
+    if (!is_probe(ts, i))
+        return TASK_OTHER;
+    return ts->nprobes++ % KD_BUDGET_SCOUT_EVERY == 0 ? TASK_SCOUT : TASK_PROBE;
+}
+
+static int is_sample(const sah_task *tk)
+{
+    return tk->kind != TASK_OTHER;
+}
+
 /* Lists TK as task number ts->n (under the pool's lock when there is one).
  * 0 when out of memory. */
 static int list_task(sah_tasks *ts, sah_task *tk)
@@ -99,7 +125,7 @@ static int list_task(sah_tasks *ts, sah_task *tk)
         }
     }
     if (ok) {
-        tk->probe = is_probe(ts, ts->n);
+        tk->kind = task_kind(ts, ts->n);
         ts->v[ts->n++] = tk;
     }
     if (pool) {
@@ -201,35 +227,42 @@ static void run_task(sah_build *w, sah_task *tk)
     w->t = (kd_tree *)main_t;
 }
 
-/* The next task for a thread to build, under the pool's lock: a probe while
- * there is one, else (unless ONLY_PROBES) any other, in task order; waits
- * while none is listed yet. A task taken before the estimate is made is
- * built in full, like a probe: the tree is the same either way (kd_prune.h),
- * and the thread would otherwise wait for the main build. NULL when there
- * is nothing more for it: the pool is closed, the estimate made (unless
- * ONLY_PROBES) and the tasks it may take taken, or the build failed. */
-static sah_task *take_task(sah_pool *pool, int only_probes)
+/* Whether a task of KIND may be taken now: any while the main build is
+ * still listing tasks (it is then built in full, as a scout is: the tree is
+ * the same either way, kd_prune.h, and the thread would otherwise wait for
+ * the main build); after that a probe once the scouts' estimate is made,
+ * any other once the whole sample's is. */
+static int may_take(const sah_pool *pool, int kind)
+{
+    return !pool->closed || kind == TASK_SCOUT || (kind == TASK_PROBE && pool->scouted) ||
+           pool->estimated;
+}
+
+/* The next task for a thread to build, under the pool's lock: the first of
+ * the kinds up to MOST (scouts, then probes, then the others, each in task
+ * order) that may be taken; waits while none may. NULL when there is
+ * nothing more for it: the pool is closed and every task of those kinds
+ * taken, or the build failed. */
+static sah_task *take_task(sah_pool *pool, int most)
 {
     sah_tasks *ts = pool->tasks;
     sah_task *tk = NULL;
     pthread_mutex_lock(&pool->lock);
     while (!pool->abort) {
-        while (pool->next_probe < ts->n && !ts->v[pool->next_probe]->probe)
-            pool->next_probe++;
-        if (pool->next_probe < ts->n) {
-            tk = ts->v[pool->next_probe++];
-            pool->probes_taken++;
-            break;
-        }
-        if (!only_probes) { /* before the estimate: built in full, as a probe is */
-            while (pool->next < ts->n && ts->v[pool->next]->probe)
-                pool->next++;
-            if (pool->next < ts->n) {
-                tk = ts->v[pool->next++];
-                break;
+        int left = 0; /* a task of those kinds not taken yet */
+        for (int k = 0; k <= most && !tk; k++) {
+            size_t *c = &pool->next[k];
+            while (*c < ts->n && ts->v[*c]->kind != k)
+                (*c)++;
+            if (*c == ts->n)
+                continue;
+            left = 1;
+            if (may_take(pool, k)) {
+                tk = ts->v[(*c)++];
+                pool->taken[k]++;
             }
         }
-        if (pool->closed && (only_probes || pool->estimated))
+        if (tk || (pool->closed && !left))
             break;
         pthread_cond_wait(&pool->more, &pool->lock);
     }
@@ -272,19 +305,18 @@ static int worker_init(sah_pool *pool, sah_build *w, sah_build *from)
 /* Builds tasks from POOL (see take_task) with W (worker_init). REPORT: the
  * thread that called the build, which reports the progress
  * (proto.progress) after each task it builds. */
-static void run_tasks(sah_pool *pool, sah_build *w, int only_probes, int report)
+static void run_tasks(sah_pool *pool, sah_build *w, int most, int report)
 {
     sah_task *tk;
-    while ((tk = take_task(pool, only_probes)) != NULL) {
+    while ((tk = take_task(pool, most)) != NULL) {
         run_task(w, tk);
         sah_tasks *ts = pool->tasks;
         pthread_mutex_lock(&pool->lock);
         ts->n_done += (double)tk->n;
         double done = ts->n_all > 0.0 ? ts->n_done / ts->n_all : 0.0;
-        if (tk->probe) {
-            pool->probes_done++;
+        pool->built[tk->kind]++;
+        if (is_sample(tk))
             pthread_cond_broadcast(&pool->done);
-        }
         pthread_mutex_unlock(&pool->lock);
         if (report && w->progress)
             w->progress(done < 1.0 ? done : 1.0, w->progress_ctx);
@@ -296,7 +328,7 @@ static void *worker(void *arg)
     sah_pool *pool = arg;
     sah_build w;
     if (worker_init(pool, &w, NULL)) /* if it cannot, the other threads take the tasks */
-        run_tasks(pool, &w, 0, 0);
+        run_tasks(pool, &w, TASK_OTHER, 0);
     worker_free(&w);
     return NULL;
 }
@@ -325,7 +357,7 @@ static sah_pool *pool_create(const sah_build *b, sah_tasks *ts)
         return NULL;
     }
     pool->tasks = ts;
-    pool->estimated = ts->probe_every == 0;
+    pool->estimated = pool->scouted = ts->probe_every == 0;
     pool->limits.max_depth = b->t->max_depth;
     pool->limits.max_leaf_prims = b->t->max_leaf_prims;
     pool->limits.pad = b->t->pad;
@@ -397,21 +429,26 @@ static int splice(kd_tree *t, const sah_task *tk)
     return 1;
 }
 
-/* The leaf budget's estimate, once the top of the tree and the probes are
- * built (every probe succeeded or the build has failed): the raised least
- * saving for the tasks not yet taken, cut_share times the estimated
- * threshold, when that is above the build's (ts->raised; else -inf). 0 when
- * out of memory. */
-static int raise_least_saving(const sah_build *b, sah_tasks *ts)
+/* The leaf budget's threshold estimated from the top of the tree and the
+ * sample tasks of the kinds in MASK (a bit per kind), every one taken built
+ * (or the build failed): from all of them and from each half (alternate
+ * ones in task order), the least into *LO and the greatest into *HI; both
+ * -inf when fewer than MIN of them were built, or one failed (the build
+ * fails anyway). 0 when out of memory. */
+static int estimate_threshold(const sah_build *b, const sah_tasks *ts, unsigned mask, size_t min,
+                              double *lo, double *hi)
 {
-    ts->raised = -INFINITY;
-    size_t probes = 0;
+    *lo = *hi = -INFINITY;
+    size_t used = 0;
     for (size_t i = 0; i < ts->n; i++) {
-        if (ts->v[i]->probe && ts->v[i]->st != BSP_OK)
-            return 1; /* the build fails anyway */
-        probes += (size_t)ts->v[i]->probe;
+        const sah_task *tk = ts->v[i];
+        if (!(mask >> tk->kind & 1u))
+            continue;
+        if (tk->st != BSP_OK)
+            return 1;
+        used++;
     }
-    if (probes < KD_BUDGET_MIN_PROBES)
+    if (used < min)
         return 1; /* too few to tell */
     kd_budget_part *parts = malloc((ts->n ? ts->n : 1) * sizeof *parts);
     if (!parts)
@@ -420,27 +457,109 @@ static int raise_least_saving(const sah_build *b, sah_tasks *ts)
         parts[i].node = ts->v[i]->node;
         parts[i].n = ts->v[i]->n;
     }
-    /* from all probes, and from each half of them (alternate probes) */
     double theta[3];
     for (int h = 0; h < 3; h++) {
-        size_t probe_i = 0;
+        size_t k = 0;
         for (size_t i = 0; i < ts->n; i++) {
             const sah_task *tk = ts->v[i];
-            int use = tk->probe && (h == 0 || (int)(probe_i % 2) == h - 1);
-            probe_i += (size_t)tk->probe;
+            int in = mask >> tk->kind & 1u;
+            int use = in && (h == 0 || (int)(k % 2) == h - 1);
+            k += (size_t)in;
             parts[i].sub = use ? &tk->sub : NULL;
         }
         theta[h] = kd_prune_estimate(b->t, parts, ts->n, ts->budget);
     }
     free(parts);
-    double lo = fmin(theta[0], fmin(theta[1], theta[2]));
-    double hi = fmax(theta[0], fmax(theta[1], theta[2]));
-    double raised = ts->cut_share * lo;
-    if (!(hi <= KD_BUDGET_SPREAD * lo) || !(raised > b->min_saving) || !isfinite(raised))
-        return 1; /* the samples disagree too much to trust, nothing to raise, or the
-                     budget is met by no split at all (a cut at +inf cannot be proved) */
-    ts->raised = raised;
+    *lo = fmin(theta[0], fmin(theta[1], theta[2]));
+    *hi = fmax(theta[0], fmax(theta[1], theta[2]));
     return 1;
+}
+
+/* SHARE times the estimate LO (HI: the greatest of its three), when the
+ * three agree well enough to trust, that is above the build's least saving
+ * and finite (a cut at +inf, the budget met by no split at all, cannot be
+ * proved); else -inf: no cut. */
+static double cut_of_estimate(const sah_build *b, double lo, double hi, double share)
+{
+    double cut = share * lo;
+    return hi <= KD_BUDGET_SPREAD * lo && cut > b->min_saving && isfinite(cut) ? cut : -INFINITY;
+}
+
+/* Gives CUT as their least saving to the tasks of KIND not taken yet, under
+ * the pool's lock (taking moves pool->next[KIND] past a task); returns
+ * whether any got it. */
+static int give_cut(sah_pool *pool, int kind, double cut)
+{
+    sah_tasks *ts = pool->tasks;
+    int any = 0;
+    for (size_t i = pool->next[kind]; i < ts->n && cut > -INFINITY; i++)
+        if (ts->v[i]->kind == kind) {
+            ts->v[i]->min_saving_sure = cut;
+            any = 1;
+        }
+    return any;
+}
+
+/* Waits until every sample task taken so far is built. */
+static void wait_for_samples(sah_pool *pool)
+{
+    pthread_mutex_lock(&pool->lock);
+    while (pool->built[TASK_SCOUT] < pool->taken[TASK_SCOUT] ||
+           pool->built[TASK_PROBE] < pool->taken[TASK_PROBE])
+        pthread_cond_wait(&pool->done, &pool->lock);
+    pthread_mutex_unlock(&pool->lock);
+}
+
+/* The leaf budget's estimates, once the top of the tree is built, and the
+ * tasks they cut (the calling thread builds tasks with W when READY, with the
+ * workers): the scouts, then their estimate, KD_BUDGET_SCOUT_SHARE of which
+ * the probes not yet taken get as their least saving; the probes, then the
+ * estimate of all the sample, cut_share of which the other tasks not yet
+ * taken get. A probe so cut counts exactly the splits that save at least its
+ * cut, so the estimate, which lies far above it, is the one its whole tree
+ * would give. ts->raised: the greatest of the cuts given. */
+static bsp_status estimate_and_cut(sah_build *b, sah_pool *pool, sah_build *w, int ready)
+{
+    sah_tasks *ts = pool->tasks;
+    bsp_status st = BSP_OK;
+    double lo, hi, probe_cut = -INFINITY, task_cut = -INFINITY;
+    /* 1. the scouts: when this thread finds none left to take, every one is
+     * taken; then wait for those still being built */
+    if (ready)
+        run_tasks(pool, w, TASK_SCOUT, 1);
+    else
+        st = task_oom(b->err);
+    wait_for_samples(pool);
+    if (st == BSP_OK && !estimate_threshold(b, ts, 1u << TASK_SCOUT, KD_BUDGET_MIN_SCOUTS, &lo, &hi))
+        st = task_oom(b->err);
+    pthread_mutex_lock(&pool->lock);
+    if (st == BSP_OK) {
+        double cut = cut_of_estimate(b, lo, hi, fmin(KD_BUDGET_SCOUT_SHARE, ts->cut_share));
+        probe_cut = give_cut(pool, TASK_PROBE, cut) ? cut : -INFINITY;
+    }
+    pool->scouted = 1;
+    pool->abort = st != BSP_OK;
+    pthread_cond_broadcast(&pool->more);
+    pthread_mutex_unlock(&pool->lock);
+    /* 2. the probes, likewise; then the estimate of the whole sample */
+    if (st == BSP_OK && ready)
+        run_tasks(pool, w, TASK_PROBE, 1);
+    wait_for_samples(pool);
+    if (st == BSP_OK && !estimate_threshold(b, ts, 1u << TASK_SCOUT | 1u << TASK_PROBE,
+                                            KD_BUDGET_MIN_PROBES, &lo, &hi))
+        st = task_oom(b->err);
+    pthread_mutex_lock(&pool->lock);
+    if (st == BSP_OK) {
+        double cut = cut_of_estimate(b, lo, hi, ts->cut_share);
+        task_cut = give_cut(pool, TASK_OTHER, cut) ? cut : -INFINITY;
+    }
+    ts->raised = fmax(probe_cut, task_cut);
+    ts->probe_cut = probe_cut;
+    pool->estimated = 1;
+    pool->abort = st != BSP_OK;
+    pthread_cond_broadcast(&pool->more);
+    pthread_mutex_unlock(&pool->lock);
+    return st;
 }
 
 bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
@@ -464,30 +583,11 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
         pool->abort = st != BSP_OK;
         pthread_cond_broadcast(&pool->more);
         pthread_mutex_unlock(&pool->lock);
-        if (st == BSP_OK && !pool->estimated) {
-            /* the probes, with the workers: when this thread finds none left
-             * to take, every one is taken; then wait for those still built */
-            if (ready)
-                run_tasks(pool, &w, 1, 1);
-            else
-                st = task_oom(b->err);
-            pthread_mutex_lock(&pool->lock);
-            while (pool->probes_done < pool->probes_taken)
-                pthread_cond_wait(&pool->done, &pool->lock);
-            pthread_mutex_unlock(&pool->lock);
-            if (st == BSP_OK && !raise_least_saving(b, ts))
-                st = task_oom(b->err);
-            pthread_mutex_lock(&pool->lock);
-            for (size_t i = pool->next; i < ts->n && ts->raised > -INFINITY; i++)
-                if (!ts->v[i]->probe) /* not taken yet: taking moves pool->next */
-                    ts->v[i]->min_saving_sure = ts->raised;
-            pool->estimated = 1;
-            pool->abort = st != BSP_OK;
-            pthread_cond_broadcast(&pool->more);
-            pthread_mutex_unlock(&pool->lock);
-        }
+        if (st == BSP_OK && !pool->estimated)
+            st = estimate_and_cut(b, pool, &w, ready);
         if (st == BSP_OK && ready)
-            run_tasks(pool, &w, 0, 1); /* if it cannot, a task left unbuilt fails the build */
+            run_tasks(pool, &w, TASK_OTHER, 1); /* if it cannot, a task left unbuilt fails
+                                                   the build */
         for (int i = 0; i < pool->started; i++)
             pthread_join(pool->tid[i], NULL);
         pool_destroy(pool);

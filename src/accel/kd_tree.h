@@ -125,6 +125,9 @@ typedef struct kd_tree {
                            budget's estimate let the build cut at (-inf: none) */
     int budget_rebuilt; /* ... and 1 when the estimate proved too high and the tree
                            was built again without it */
+    double budget_probe_cut; /* ... and the least saving the estimate's probes were
+                                built with, from its scouts' (-inf: none; not
+                                kept in a tree file) */
     int octree;         /* 1: an octree in binary form (kd_build_octree); its figures
                            count octree nodes (interior nodes and depths in octree
                            levels: three binary levels each) */
