@@ -163,12 +163,13 @@ asan-test:
 
 # The tests that run threads, under ThreadSanitizer (needs clang): ray
 # batches, renders on one and two threads, the parallel SAH build (1 and 3
-# threads, byte for byte), the first calls of bsp_spd_scene_names from four
+# threads, byte for byte; and with the leaf budget's estimate, whose scouts,
+# probes and other tasks the threads take in turn), the first calls of bsp_spd_scene_names from four
 # threads, scenes loaded and structures built and queried on four threads at
 # once, and the allocation sweep's two-thread scenarios.
 # A race report exits the program with status 66, which fails the test.
 TSAN_BUILD := build-tsan
-TSAN_TESTS := batch_ spd_names_list threads_share render_identical render_tiles sah_build_is_deterministic bvh_build_is_deterministic every_allocation
+TSAN_TESTS := batch_ spd_names_list threads_share render_identical render_tiles sah_build_is_deterministic sah_leaf_budget_estimate bvh_build_is_deterministic every_allocation
 tsan-test:
 	$(MAKE) BUILD=$(TSAN_BUILD) CC=clang CXX=clang++ OPT="-O1 -g" SAN="-fsanitize=thread" \
 	    $(TSAN_BUILD)/bspray $(TSAN_BUILD)/bspray_tests $(TSAN_BUILD)/tests/oom_sweep
