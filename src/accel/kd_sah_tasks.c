@@ -64,8 +64,8 @@ struct sah_pool {
     size_t next[TASK_KINDS];  /* per kind: where to look for the next task to take */
     size_t taken[TASK_KINDS], built[TASK_KINDS]; /* per kind: tasks taken by a thread,
                                                     and built */
-    int scouted;         /* the scouts' estimate is made (or none is wanted): probes may go */
-    int estimated;       /* the estimate is made (or none is wanted): every task may go */
+    int open[TASK_KINDS]; /* per kind: its estimate is made (or none is wanted), so that
+                             the tasks of the kind may go (scouts: always) */
     pthread_cond_t done; /* a scout or a probe was built */
     int closed;          /* the main build is over: no task will be listed */
     int abort;           /* ... and it failed: build no more tasks */
@@ -234,8 +234,7 @@ static void run_task(sah_build *w, sah_task *tk)
  * any other once the whole sample's is. */
 static int may_take(const sah_pool *pool, int kind)
 {
-    return !pool->closed || kind == TASK_SCOUT || (kind == TASK_PROBE && pool->scouted) ||
-           pool->estimated;
+    return !pool->closed || pool->open[kind];
 }
 
 /* The next task for a thread to build, under the pool's lock: the first of
@@ -357,7 +356,8 @@ static sah_pool *pool_create(const sah_build *b, sah_tasks *ts)
         return NULL;
     }
     pool->tasks = ts;
-    pool->estimated = pool->scouted = ts->probe_every == 0;
+    pool->open[TASK_SCOUT] = 1;
+    pool->open[TASK_PROBE] = pool->open[TASK_OTHER] = ts->probe_every == 0;
     pool->limits.max_depth = b->t->max_depth;
     pool->limits.max_leaf_prims = b->t->max_leaf_prims;
     pool->limits.pad = b->t->pad;
@@ -512,53 +512,44 @@ static void wait_for_samples(sah_pool *pool)
 
 /* The leaf budget's estimates, once the top of the tree is built, and the
  * tasks they cut (the calling thread builds tasks with W when READY, with the
- * workers): the scouts, then their estimate, KD_BUDGET_SCOUT_SHARE of which
- * the probes not yet taken get as their least saving; the probes, then the
- * estimate of all the sample, cut_share of which the other tasks not yet
- * taken get. A probe so cut counts exactly the splits that save at least its
- * cut, so the estimate, which lies far above it, is the one its whole tree
- * would give. ts->raised: the greatest of the cuts given. */
+ * workers), in two phases, one per kind of sample: the scouts, then their
+ * estimate, KD_BUDGET_SCOUT_SHARE of which the probes not yet taken get as
+ * their least saving; the probes, then the estimate of the whole sample,
+ * cut_share of which the other tasks not yet taken get. Each phase then
+ * opens the next kind to the threads. A probe so cut counts exactly the
+ * splits that save at least its cut, so the estimate, which lies far above
+ * it, is the one its whole tree would give. ts->raised: the greatest of the
+ * cuts given; ts->probe_cut: the probes'. */
 static bsp_status estimate_and_cut(sah_build *b, sah_pool *pool, sah_build *w, int ready)
 {
     sah_tasks *ts = pool->tasks;
-    bsp_status st = BSP_OK;
-    double lo, hi, probe_cut = -INFINITY, task_cut = -INFINITY;
-    /* 1. the scouts: when this thread finds none left to take, every one is
-     * taken; then wait for those still being built */
-    if (ready)
-        run_tasks(pool, w, TASK_SCOUT, 1);
-    else
-        st = task_oom(b->err);
-    wait_for_samples(pool);
-    if (st == BSP_OK && !estimate_threshold(b, ts, 1u << TASK_SCOUT, KD_BUDGET_MIN_SCOUTS, &lo, &hi))
-        st = task_oom(b->err);
-    pthread_mutex_lock(&pool->lock);
-    if (st == BSP_OK) {
-        double cut = cut_of_estimate(b, lo, hi, fmin(KD_BUDGET_SCOUT_SHARE, ts->cut_share));
-        probe_cut = give_cut(pool, TASK_PROBE, cut) ? cut : -INFINITY;
+    bsp_status st = ready ? BSP_OK : task_oom(b->err);
+    double given[TASK_OTHER] = {-INFINITY, -INFINITY}; /* the cut each phase gave */
+    for (int k = TASK_SCOUT; k < TASK_OTHER; k++) {
+        /* when this thread finds none of kind K left to take, every one is
+         * taken; then wait for those still being built */
+        if (st == BSP_OK)
+            run_tasks(pool, w, k, 1);
+        wait_for_samples(pool);
+        const unsigned kinds = (2u << k) - 1u; /* this kind and the ones before */
+        const size_t least = k == TASK_SCOUT ? KD_BUDGET_MIN_SCOUTS : KD_BUDGET_MIN_PROBES;
+        const double share =
+            k == TASK_SCOUT ? fmin(KD_BUDGET_SCOUT_SHARE, ts->cut_share) : ts->cut_share;
+        double lo, hi;
+        if (st == BSP_OK && !estimate_threshold(b, ts, kinds, least, &lo, &hi))
+            st = task_oom(b->err);
+        pthread_mutex_lock(&pool->lock);
+        if (st == BSP_OK) {
+            double cut = cut_of_estimate(b, lo, hi, share);
+            given[k] = give_cut(pool, k + 1, cut) ? cut : -INFINITY;
+        }
+        pool->open[k + 1] = 1;
+        pool->abort = st != BSP_OK;
+        pthread_cond_broadcast(&pool->more);
+        pthread_mutex_unlock(&pool->lock);
     }
-    pool->scouted = 1;
-    pool->abort = st != BSP_OK;
-    pthread_cond_broadcast(&pool->more);
-    pthread_mutex_unlock(&pool->lock);
-    /* 2. the probes, likewise; then the estimate of the whole sample */
-    if (st == BSP_OK && ready)
-        run_tasks(pool, w, TASK_PROBE, 1);
-    wait_for_samples(pool);
-    if (st == BSP_OK && !estimate_threshold(b, ts, 1u << TASK_SCOUT | 1u << TASK_PROBE,
-                                            KD_BUDGET_MIN_PROBES, &lo, &hi))
-        st = task_oom(b->err);
-    pthread_mutex_lock(&pool->lock);
-    if (st == BSP_OK) {
-        double cut = cut_of_estimate(b, lo, hi, ts->cut_share);
-        task_cut = give_cut(pool, TASK_OTHER, cut) ? cut : -INFINITY;
-    }
-    ts->raised = fmax(probe_cut, task_cut);
-    ts->probe_cut = probe_cut;
-    pool->estimated = 1;
-    pool->abort = st != BSP_OK;
-    pthread_cond_broadcast(&pool->more);
-    pthread_mutex_unlock(&pool->lock);
+    ts->raised = fmax(given[TASK_SCOUT], given[TASK_PROBE]);
+    ts->probe_cut = given[TASK_SCOUT];
     return st;
 }
 
@@ -583,7 +574,7 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
         pool->abort = st != BSP_OK;
         pthread_cond_broadcast(&pool->more);
         pthread_mutex_unlock(&pool->lock);
-        if (st == BSP_OK && !pool->estimated)
+        if (st == BSP_OK && !pool->open[TASK_OTHER])
             st = estimate_and_cut(b, pool, &w, ready);
         if (st == BSP_OK && ready)
             run_tasks(pool, &w, TASK_OTHER, 1); /* if it cannot, a task left unbuilt fails
