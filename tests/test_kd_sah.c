@@ -766,8 +766,9 @@ TEST(sah_leaf_budget_estimate_builds_the_same_tree)
         CHECK_MSG(tw->budget_cut == -INFINITY && t0->budget_cut > 0.0 && !t0->budget_rebuilt,
                   "%s: the estimate did not cut (cut %g, rebuilt %d)", scenes[i], t0->budget_cut,
                   t0->budget_rebuilt);
-        /* (shells' few tasks make too few scouts for an estimate of their own) */
-        CHECK_MSG(i == 2 || (t0->budget_probe_cut > 0.0 && t0->budget_probe_cut < t0->budget_cut),
+        /* (shells' scouts disagree 60x, and the least of their estimates
+         * still cuts the probes) */
+        CHECK_MSG(t0->budget_probe_cut > 0.0 && t0->budget_probe_cut < t0->budget_cut,
                   "%s: the scouts' estimate did not cut the probes (cut %g, probes' %g)",
                   scenes[i], t0->budget_cut, t0->budget_probe_cut);
         CHECK_MSG(same_tree(tw, t0), "%s: the tree with the estimate differs", scenes[i]);

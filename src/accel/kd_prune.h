@@ -39,8 +39,10 @@ typedef struct kd_budget_part {
  * others; from at least KD_BUDGET_MIN_SCOUTS scouts a first estimate, and
  * the other probes are built without the splits that save less than
  * KD_BUDGET_SCOUT_SHARE of it (their counts above that are exact, and
- * the estimate lies far above it). Estimates (of all probes, and of each
- * half) further apart than KD_BUDGET_SPREAD times are not trusted. */
+ * the estimate lies far above it; the scouts' least estimate is taken even
+ * where they disagree, which only makes it lower). For the other tasks'
+ * cut, estimates (of all probes, and of each half) further apart than
+ * KD_BUDGET_SPREAD times are not trusted. */
 #define KD_BUDGET_PROBE_EVERY 8
 #define KD_BUDGET_MIN_PROBES 4
 #define KD_BUDGET_SCOUT_EVERY 3

@@ -476,13 +476,16 @@ static int estimate_threshold(const sah_build *b, const sah_tasks *ts, unsigned 
 }
 
 /* SHARE times the estimate LO (HI: the greatest of its three), when the
- * three agree well enough to trust, that is above the build's least saving
+ * three agree well enough to trust (or AGREE is 0: the least of them is
+ * taken whatever the others say), that is above the build's least saving
  * and finite (a cut at +inf, the budget met by no split at all, cannot be
  * proved); else -inf: no cut. */
-static double cut_of_estimate(const sah_build *b, double lo, double hi, double share)
+static double cut_of_estimate(const sah_build *b, double lo, double hi, double share, int agree)
 {
     double cut = share * lo;
-    return hi <= KD_BUDGET_SPREAD * lo && cut > b->min_saving && isfinite(cut) ? cut : -INFINITY;
+    return (!agree || hi <= KD_BUDGET_SPREAD * lo) && cut > b->min_saving && isfinite(cut)
+               ? cut
+               : -INFINITY;
 }
 
 /* Gives CUT as their least saving to the tasks of KIND not taken yet, under
@@ -513,8 +516,9 @@ static void wait_for_samples(sah_pool *pool)
 /* The leaf budget's estimates, once the top of the tree is built, and the
  * tasks they cut (the calling thread builds tasks with W when READY, with the
  * workers), in two phases, one per kind of sample: the scouts, then their
- * estimate, KD_BUDGET_SCOUT_SHARE of which the probes not yet taken get as
- * their least saving; the probes, then the estimate of the whole sample,
+ * estimate (the least of its three), KD_BUDGET_SCOUT_SHARE of which the
+ * probes not yet taken get as their least saving; the probes, then the
+ * estimate of the whole sample (when its three agree),
  * cut_share of which the other tasks not yet taken get. Each phase then
  * opens the next kind to the threads. A probe so cut counts exactly the
  * splits that save at least its cut, so the estimate, which lies far above
@@ -540,7 +544,12 @@ static bsp_status estimate_and_cut(sah_build *b, sah_pool *pool, sah_build *w, i
             st = task_oom(b->err);
         pthread_mutex_lock(&pool->lock);
         if (st == BSP_OK) {
-            double cut = cut_of_estimate(b, lo, hi, share);
+            /* the probes' cut need not wait for the scouts to agree: it
+             * lies far under the least of their estimates, and scouts that
+             * disagree make that least one lower still (teapot:40's lie 16x
+             * apart, their least at a quarter of the threshold, and their
+             * probes had been built in full: 40 % of the build) */
+            double cut = cut_of_estimate(b, lo, hi, share, k != TASK_SCOUT);
             given[k] = give_cut(pool, k + 1, cut) ? cut : -INFINITY;
         }
         pool->open[k + 1] = 1;
@@ -602,8 +611,10 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
             if (b->err)
                 *b->err = tk->err;
             st = tk->st;
-        } else if (!splice(b->t, tk)) {
-            st = kd_build_failed(b->t, b->err);
+        } else {
+            if (!splice(b->t, tk))
+                st = kd_build_failed(b->t, b->err);
+            kd_tree_free(&ts->v[i]->sub); /* copied: its memory for the next one */
         }
     }
     for (size_t i = 0; i < ts->n; i++) {
