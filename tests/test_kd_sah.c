@@ -740,8 +740,9 @@ TEST(sah_leaf_budget_prunes_to_the_budget)
  * that skips the splits below the estimate's cut, and its probes those below
  * the smaller cut of its scouts' estimate, makes the very tree of the build
  * that makes every split and then prunes, on every thread count — on scenes
- * where the estimates do cut (budget_cut > 0; budget_probe_cut > 0 on mount
- * and gears); a cut too high is found out and the tree built again. Fails
+ * where the estimates do cut (budget_cut > 0; budget_probe_cut > 0 on mount,
+ * gears and shells, budget_scout_cut > 0 on shells); a cut too high is found
+ * out and the tree built again. Fails
  * when the cut also applies below a speculative split (shells). */
 TEST(sah_leaf_budget_estimate_builds_the_same_tree)
 {
@@ -771,6 +772,10 @@ TEST(sah_leaf_budget_estimate_builds_the_same_tree)
         CHECK_MSG(t0->budget_probe_cut > 0.0 && t0->budget_probe_cut < t0->budget_cut,
                   "%s: the scouts' estimate did not cut the probes (cut %g, probes' %g)",
                   scenes[i], t0->budget_cut, t0->budget_probe_cut);
+        /* (mount's and gears' few scouts make one pilot: no estimate of its own) */
+        CHECK_MSG(i != 2 || (t0->budget_scout_cut > 0.0 && t0->budget_scout_cut < t0->budget_cut),
+                  "%s: the pilots' estimate did not cut the scouts (cut %g, scouts' %g)",
+                  scenes[i], t0->budget_cut, t0->budget_scout_cut);
         CHECK_MSG(same_tree(tw, t0), "%s: the tree with the estimate differs", scenes[i]);
         CHECK_MSG(same_tree(t0, t1) && t0->budget_cut == t1->budget_cut,
                   "%s: 1 and 3 threads build different trees", scenes[i]);

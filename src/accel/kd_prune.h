@@ -35,19 +35,22 @@ typedef struct kd_budget_part {
  * fewer than KD_BUDGET_MIN_PROBES; the other subtrees are built without the
  * splits that save less than a share of the estimate
  * (kd_cost_model.budget_cut; docs/kdtree.md: how far the estimates err).
- * One probe in KD_BUDGET_SCOUT_EVERY is a scout, built in full before the
- * others; from at least KD_BUDGET_MIN_SCOUTS scouts a first estimate, and
- * the other probes are built without the splits that save less than
- * KD_BUDGET_SCOUT_SHARE of it (their counts above that are exact, and
- * the estimate lies far above it; the scouts' least estimate is taken even
- * where they disagree, which only makes it lower). For the other tasks'
- * cut, estimates (of all probes, and of each half) further apart than
- * KD_BUDGET_SPREAD times are not trusted. */
+ * One probe in KD_BUDGET_SCOUT_EVERY is a scout, built before the others,
+ * and every other scout a pilot, built first and in full. From at least
+ * KD_BUDGET_MIN_SCOUTS pilots a first estimate, and the other scouts are
+ * built without the splits that save less than KD_BUDGET_PILOT_SHARE of
+ * it; from pilots and scouts a second, and the other probes are built
+ * without those saving less than KD_BUDGET_SCOUT_SHARE of it (their counts
+ * above that are exact, and the estimate lies far above it; the least of
+ * an estimate's three is taken even where they disagree, which only makes
+ * it lower). For the other tasks' cut, estimates (of all probes, and of
+ * each half) further apart than KD_BUDGET_SPREAD times are not trusted. */
 #define KD_BUDGET_PROBE_EVERY 8
 #define KD_BUDGET_MIN_PROBES 4
 #define KD_BUDGET_SCOUT_EVERY 3
 #define KD_BUDGET_MIN_SCOUTS 2
 #define KD_BUDGET_SCOUT_SHARE 0.25
+#define KD_BUDGET_PILOT_SHARE 0.125
 #define KD_BUDGET_SPREAD 4.0
 
 /* Estimates the threshold kd_prune_to_leaves will find for MAX_LEAVES

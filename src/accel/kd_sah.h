@@ -116,12 +116,14 @@ typedef struct sah_tasks {
      * built before the others; from the probes and the top of the tree the
      * budget's threshold is estimated, and the other tasks are built with a
      * least saving of cut_share times it (splits below it would be pruned
-     * anyway). One probe in KD_BUDGET_SCOUT_EVERY is a scout, built first
-     * and in full: from the scouts alone a first, cautious estimate, and the
-     * other probes are built with a least saving of a small share of it
-     * (kd_sah_tasks.c). 0: no estimate, every task in full. */
+     * anyway). One probe in KD_BUDGET_SCOUT_EVERY is a scout and every
+     * other scout a pilot: the pilots first and in full, then the scouts and
+     * then the other probes, each with a least saving of a small share of
+     * the estimate from the sample before them (kd_sah_tasks.c, kd_prune.h).
+     * 0: no estimate, every task in full. */
     size_t probe_every;
     size_t nprobes;      /* probes listed so far (which of them are scouts) */
+    size_t nscouts;      /* scouts listed so far (which of them are pilots) */
     size_t budget;       /* the leaf budget the estimate is for */
     double cut_share;    /* the share of the estimate the other tasks cut at */
     double raised;       /* out: the greatest least saving any task was built with
@@ -129,6 +131,7 @@ typedef struct sah_tasks {
                             ever): the cut the prune must prove harmless */
     double probe_cut;    /* out: the least saving the probes were built with, from the
                             scouts' estimate (-inf: none) */
+    double scout_cut;    /* out: the same for the scouts, from the pilots' estimate */
     double n_done, n_all; /* the primitives of the tasks built, and of all (progress) */
 } sah_tasks;
 

@@ -42,20 +42,22 @@ struct sah_task {
     int depth, surface;
     uint64_t *ev;  /* its three lists (axis k at k * 2n), then room to grow */
     kd_tree sub;   /* its subtree, root at 0 */
-    int kind;      /* TASK_SCOUT, TASK_PROBE (the leaf budget's sample, built first:
-                      sah_tasks.probe_every) or TASK_OTHER */
+    int kind;      /* TASK_PILOT, TASK_SCOUT, TASK_PROBE (the leaf budget's sample,
+                      built first: sah_tasks.probe_every) or TASK_OTHER */
     double min_saving_sure; /* > the build's: its raised least saving (sah_build) */
     bsp_status st;
     bsp_error err;
 };
 
-/* The kinds of task, in the order the threads take them. A scout is built
- * in full; a probe, once the scouts' estimate is made, without the splits
- * that save less than a small share of it; the others, once the estimate
- * of the whole sample is made, without those that save less than
- * cut_share of it. A task taken before its estimate is made (while the
- * main build is still listing tasks) is built in full. */
-enum { TASK_SCOUT, TASK_PROBE, TASK_OTHER, TASK_KINDS };
+/* The kinds of task, in the order the threads take them. A pilot is built
+ * in full; a scout, once the pilots' estimate is made, without the splits
+ * that save less than a very small share of it; a probe, once the estimate
+ * of the pilots and scouts is made, without those that save less than a
+ * small share of it; the others, once the estimate of the whole sample is
+ * made, without those that save less than cut_share of it. A task taken
+ * before its estimate is made (while the main build is still listing
+ * tasks) is built in full. */
+enum { TASK_PILOT, TASK_SCOUT, TASK_PROBE, TASK_OTHER, TASK_KINDS };
 
 struct sah_pool {
     pthread_mutex_t lock;
@@ -65,8 +67,8 @@ struct sah_pool {
     size_t taken[TASK_KINDS], built[TASK_KINDS]; /* per kind: tasks taken by a thread,
                                                     and built */
     int open[TASK_KINDS]; /* per kind: its estimate is made (or none is wanted), so that
-                             the tasks of the kind may go (scouts: always) */
-    pthread_cond_t done; /* a scout or a probe was built */
+                             the tasks of the kind may go (pilots: always) */
+    pthread_cond_t done; /* a sample task was built */
     int closed;          /* the main build is over: no task will be listed */
     int abort;           /* ... and it failed: build no more tasks */
     int started;         /* worker threads running */
@@ -93,12 +95,15 @@ static int is_probe(const sah_tasks *ts, size_t i)
 }
 
 /* The kind of task I: every KD_BUDGET_SCOUT_EVERY-th probe in task order
- * (the probes' hash spreads them, so the scouts too) is a scout. */
+ * (the probes' hash spreads them, so the scouts too) is a scout, and every
+ * other scout, from the first, a pilot. */
 static int task_kind(sah_tasks *ts, size_t i)
 {
     if (!is_probe(ts, i))
         return TASK_OTHER;
-    return ts->nprobes++ % KD_BUDGET_SCOUT_EVERY == 0 ? TASK_SCOUT : TASK_PROBE;
+    if (ts->nprobes++ % KD_BUDGET_SCOUT_EVERY != 0)
+        return TASK_PROBE;
+    return ts->nscouts++ % 2 == 0 ? TASK_PILOT : TASK_SCOUT;
 }
 
 static int is_sample(const sah_task *tk)
@@ -356,8 +361,9 @@ static sah_pool *pool_create(const sah_build *b, sah_tasks *ts)
         return NULL;
     }
     pool->tasks = ts;
-    pool->open[TASK_SCOUT] = 1;
-    pool->open[TASK_PROBE] = pool->open[TASK_OTHER] = ts->probe_every == 0;
+    pool->open[TASK_PILOT] = 1;
+    for (int k = TASK_SCOUT; k < TASK_KINDS; k++)
+        pool->open[k] = ts->probe_every == 0;
     pool->limits.max_depth = b->t->max_depth;
     pool->limits.max_leaf_prims = b->t->max_leaf_prims;
     pool->limits.pad = b->t->pad;
@@ -507,49 +513,53 @@ static int give_cut(sah_pool *pool, int kind, double cut)
 static void wait_for_samples(sah_pool *pool)
 {
     pthread_mutex_lock(&pool->lock);
-    while (pool->built[TASK_SCOUT] < pool->taken[TASK_SCOUT] ||
-           pool->built[TASK_PROBE] < pool->taken[TASK_PROBE])
-        pthread_cond_wait(&pool->done, &pool->lock);
+    for (int k = 0; k < TASK_OTHER; k++)
+        while (pool->built[k] < pool->taken[k])
+            pthread_cond_wait(&pool->done, &pool->lock);
     pthread_mutex_unlock(&pool->lock);
 }
 
 /* The leaf budget's estimates, once the top of the tree is built, and the
  * tasks they cut (the calling thread builds tasks with W when READY, with the
- * workers), in two phases, one per kind of sample: the scouts, then their
- * estimate (the least of its three), KD_BUDGET_SCOUT_SHARE of which the
- * probes not yet taken get as their least saving; the probes, then the
- * estimate of the whole sample (when its three agree),
- * cut_share of which the other tasks not yet taken get. Each phase then
- * opens the next kind to the threads. A probe so cut counts exactly the
- * splits that save at least its cut, so the estimate, which lies far above
- * it, is the one its whole tree would give. ts->raised: the greatest of the
- * cuts given; ts->probe_cut: the probes'. */
+ * workers), in three phases, one per kind of sample: the pilots, then their
+ * estimate, KD_BUDGET_PILOT_SHARE of which the scouts not yet taken get as
+ * their least saving; the scouts, then the estimate of pilots and scouts,
+ * KD_BUDGET_SCOUT_SHARE of which the probes get; the probes, then the
+ * estimate of the whole sample, cut_share of which the other tasks get.
+ * Each phase then opens the next kind to the threads. A task so cut counts
+ * exactly the splits that save at least its cut, so the next estimate,
+ * which lies far above it, is the one its whole tree would give. The
+ * pilots' and scouts' cuts take the least of their three estimates whether
+ * the three agree or not: the cut lies far under it, and estimates that
+ * disagree make the least one lower still (teapot:40's scouts lie 16x
+ * apart, their least at a quarter of the threshold, and its probes had been
+ * built in full: 40 % of the build); the other tasks' cut, near the
+ * threshold, waits for the three to agree. ts->raised: the greatest of the
+ * cuts given; ts->scout_cut, ts->probe_cut: the scouts' and the probes'. */
 static bsp_status estimate_and_cut(sah_build *b, sah_pool *pool, sah_build *w, int ready)
 {
     sah_tasks *ts = pool->tasks;
     bsp_status st = ready ? BSP_OK : task_oom(b->err);
-    double given[TASK_OTHER] = {-INFINITY, -INFINITY}; /* the cut each phase gave */
-    for (int k = TASK_SCOUT; k < TASK_OTHER; k++) {
+    /* per phase: the sample it needs and the share of its estimate it cuts at */
+    const size_t least[TASK_OTHER] = {KD_BUDGET_MIN_SCOUTS, KD_BUDGET_MIN_SCOUTS,
+                                      KD_BUDGET_MIN_PROBES};
+    const double share[TASK_OTHER] = {fmin(KD_BUDGET_PILOT_SHARE, ts->cut_share),
+                                      fmin(KD_BUDGET_SCOUT_SHARE, ts->cut_share),
+                                      ts->cut_share};
+    double given[TASK_OTHER] = {-INFINITY, -INFINITY, -INFINITY}; /* the cut each gave */
+    for (int k = TASK_PILOT; k < TASK_OTHER; k++) {
         /* when this thread finds none of kind K left to take, every one is
          * taken; then wait for those still being built */
         if (st == BSP_OK)
             run_tasks(pool, w, k, 1);
         wait_for_samples(pool);
         const unsigned kinds = (2u << k) - 1u; /* this kind and the ones before */
-        const size_t least = k == TASK_SCOUT ? KD_BUDGET_MIN_SCOUTS : KD_BUDGET_MIN_PROBES;
-        const double share =
-            k == TASK_SCOUT ? fmin(KD_BUDGET_SCOUT_SHARE, ts->cut_share) : ts->cut_share;
         double lo, hi;
-        if (st == BSP_OK && !estimate_threshold(b, ts, kinds, least, &lo, &hi))
+        if (st == BSP_OK && !estimate_threshold(b, ts, kinds, least[k], &lo, &hi))
             st = task_oom(b->err);
         pthread_mutex_lock(&pool->lock);
         if (st == BSP_OK) {
-            /* the probes' cut need not wait for the scouts to agree: it
-             * lies far under the least of their estimates, and scouts that
-             * disagree make that least one lower still (teapot:40's lie 16x
-             * apart, their least at a quarter of the threshold, and their
-             * probes had been built in full: 40 % of the build) */
-            double cut = cut_of_estimate(b, lo, hi, share, k != TASK_SCOUT);
+            double cut = cut_of_estimate(b, lo, hi, share[k], k + 1 == TASK_OTHER);
             given[k] = give_cut(pool, k + 1, cut) ? cut : -INFINITY;
         }
         pool->open[k + 1] = 1;
@@ -557,7 +567,8 @@ static bsp_status estimate_and_cut(sah_build *b, sah_pool *pool, sah_build *w, i
         pthread_cond_broadcast(&pool->more);
         pthread_mutex_unlock(&pool->lock);
     }
-    ts->raised = fmax(given[TASK_SCOUT], given[TASK_PROBE]);
+    ts->raised = fmax(given[TASK_PILOT], fmax(given[TASK_SCOUT], given[TASK_PROBE]));
+    ts->scout_cut = given[TASK_PILOT];
     ts->probe_cut = given[TASK_SCOUT];
     return st;
 }

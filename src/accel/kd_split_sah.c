@@ -102,14 +102,15 @@ static void root_lists(sah_build *b, size_t m, int threads)
 /* One build of the tree B->t over the N live primitives (of NP; cost sum
  * TSUM) from fresh root lists, with its tasks (on the threads O asks for);
  * with CUT_SHARE > 0, CUT_SHARE times the leaf budget BUDGET's estimate
- * raises the least saving of the tasks built after it, and a share of its
- * scouts' estimate that of its probes (kd_sah_tasks.c): *RAISED, the
- * greatest least saving any task was built with, and *PROBE_CUT, the
- * probes' (else -inf). The savings are recorded when b->record_savings;
- * the tree is not pruned here. */
+ * raises the least saving of the tasks built after it, and shares of its
+ * pilots' and scouts' estimates those of its scouts and probes
+ * (kd_sah_tasks.c): *RAISED, the greatest least saving any task was built
+ * with, *PROBE_CUT and *SCOUT_CUT, the probes' and the scouts' (else
+ * -inf). The savings are recorded when b->record_savings; the tree is not
+ * pruned here. */
 static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n, size_t np,
                              double tsum, size_t budget, double cut_share, double *raised,
-                             double *probe_cut)
+                             double *probe_cut, double *scout_cut)
 {
     kd_tree *t = b->t;
     b->min_saving_sure = b->min_saving;
@@ -138,7 +139,7 @@ static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n,
     tasks.probe_every = cut_share > 0.0 ? KD_BUDGET_PROBE_EVERY : 0;
     tasks.budget = budget;
     tasks.cut_share = cut_share;
-    tasks.raised = tasks.probe_cut = -INFINITY;
+    tasks.raised = tasks.probe_cut = tasks.scout_cut = -INFINITY;
     b->tasks = &tasks;
     kd_sah_start_workers(b, threads, n);
     double cost;
@@ -146,6 +147,7 @@ static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n,
     st = kd_sah_finish_tasks(b, st);
     *raised = tasks.raised;
     *probe_cut = tasks.probe_cut;
+    *scout_cut = tasks.scout_cut;
     b->tasks = NULL; /* TASKS lives in this frame only */
     kd_sah_scratch_free(b);
     return st;
@@ -282,9 +284,9 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
      * saving, so splits it cut might have stayed), once more without. */
     int estimate = b.record_savings && cm.budget_cut > 0.0;
     for (;;) {
-        double raised = -INFINITY, probe_cut = -INFINITY;
+        double raised = -INFINITY, probe_cut = -INFINITY, scout_cut = -INFINITY;
         st = build_tree(&b, o, n, np, tsum, budget, estimate ? cm.budget_cut : 0.0, &raised,
-                        &probe_cut);
+                        &probe_cut, &scout_cut);
         if (st != BSP_OK || !b.record_savings)
             break;
         int r = kd_prune_to_leaves(t, budget, raised);
@@ -292,6 +294,7 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
             st = oom(&b);
         t->budget_cut = r > 0 ? raised : -INFINITY;
         t->budget_probe_cut = r > 0 ? probe_cut : -INFINITY;
+        t->budget_scout_cut = r > 0 ? scout_cut : -INFINITY;
         if (r >= 0 || !estimate)
             break;
         estimate = 0; /* the estimate was too high: the tree without it */

@@ -29,7 +29,7 @@ int kd_tree_init(kd_tree *t, const bsp_scene *scene, int max_depth, int max_leaf
     t->nodes = malloc(t->cap_nodes * sizeof *t->nodes);
     if (!t->nodes)
         return 0;
-    t->budget_cut = t->budget_probe_cut = -INFINITY;
+    t->budget_cut = t->budget_probe_cut = t->budget_scout_cut = -INFINITY;
     t->nnodes = 1; /* the root */
     t->nodes[0].u.first = 0;
     t->nodes[0].bits = KD_LEAF_TAG; /* an empty leaf until built */

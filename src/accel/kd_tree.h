@@ -128,6 +128,7 @@ typedef struct kd_tree {
     double budget_probe_cut; /* ... and the least saving the estimate's probes were
                                 built with, from its scouts' (-inf: none; not
                                 kept in a tree file) */
+    double budget_scout_cut; /* ... and its scouts', from its pilots' (the same) */
     int octree;         /* 1: an octree in binary form (kd_build_octree); its figures
                            count octree nodes (interior nodes and depths in octree
                            levels: three binary levels each) */
