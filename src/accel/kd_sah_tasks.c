@@ -11,12 +11,13 @@
  * are deferred, each with scratch of its own (the per-primitive bounds,
  * costs and classes are shared read-only); when the main build is done, its
  * thread joins them. With a leaf budget's estimate (sah_tasks.probe_every)
- * the sampled tasks go first, scouts before probes; once the main build is
- * done and the scouts are built, the calling thread makes a first estimate
- * from them, and the probes not yet taken are built with a small share of
- * it as their least saving; once the probes are built too, the estimate
- * from the whole sample, and the tasks not yet taken are built with its
- * raised least saving (estimate_and_cut). The subtrees are then appended
+ * the sampled tasks go first, pilots, scouts, then probes; once the main
+ * build is done and the pilots are built, the calling thread makes a first
+ * estimate from them, and the scouts not yet taken are built with a small
+ * share of it as their least saving; from pilots and scouts a second, for
+ * the probes; once the probes are built too, the estimate from the whole
+ * sample, and the tasks not yet taken are built with its raised least
+ * saving (estimate_and_cut). The subtrees are then appended
  * to the main array in task order, their child and leaf indices rebased.
  * Which nodes become tasks depends only on the scene, so every thread count
  * builds the very same node array: within a task, and in the top part,
