@@ -737,8 +737,8 @@ TEST(sah_leaf_budget_prunes_to_the_budget)
 }
 
 /* The leaf budget's estimate (kd_prune_estimate, kd_sah_tasks.c): the build
- * that skips the splits below the estimate's cut, and its probes those below
- * the smaller cut of its scouts' estimate, makes the very tree of the build
+ * that skips the splits below the estimate's cut, and its scouts and probes
+ * those below the smaller cuts of its pilots' and scouts' estimates, makes the very tree of the build
  * that makes every split and then prunes, on every thread count — on scenes
  * where the estimates do cut (budget_cut > 0; budget_probe_cut > 0 on mount,
  * gears and shells, budget_scout_cut > 0 on shells); a cut too high is found

@@ -99,6 +99,15 @@ static inline float round_up(double x)
 enum { COST_UNIFORM, COST_CLASS, COST_ARRAY };
 #define EV_CLASS_SHIFT 28
 
+/* The least savings a build's leaf budget estimates raised, above the
+ * build's own (-inf: none; b->min_saving applied as ever): RAISED the
+ * greatest any task was built with, the cut the prune must prove harmless;
+ * PROBE the probes', from the scouts' estimate; SCOUT the scouts', from the
+ * pilots' (kd_sah_tasks.c). */
+typedef struct sah_budget_cuts {
+    double raised, probe, scout;
+} sah_budget_cuts;
+
 /* Subtrees deferred by the main build to be built in parallel
  * (kd_sah_tasks.c): worker threads build them while the main build goes on. */
 typedef struct sah_task sah_task;
@@ -126,12 +135,7 @@ typedef struct sah_tasks {
     size_t nscouts;      /* scouts listed so far (which of them are pilots) */
     size_t budget;       /* the leaf budget the estimate is for */
     double cut_share;    /* the share of the estimate the other tasks cut at */
-    double raised;       /* out: the greatest least saving any task was built with
-                            above the build's (-inf: none; b->min_saving applied as
-                            ever): the cut the prune must prove harmless */
-    double probe_cut;    /* out: the least saving the probes were built with, from the
-                            scouts' estimate (-inf: none) */
-    double scout_cut;    /* out: the same for the scouts, from the pilots' estimate */
+    sah_budget_cuts cuts; /* out: the least savings the estimates raised */
     double n_done, n_all; /* the primitives of the tasks built, and of all (progress) */
 } sah_tasks;
 
@@ -155,7 +159,7 @@ typedef struct sah_build {
                            of the root: kd_cost_model.min_saving times the mean T_i */
     double min_saving_sure; /* the same, >= min_saving, for a node with no speculative
                                ancestor (bad == 0): raised by the leaf budget's estimate
-                               in the tasks built after it (sah_tasks.raised) */
+                               in the tasks built after it (sah_tasks.cuts) */
     double inv_root_area; /* 1 / the root cell's surface area */
     int record_savings;   /* record every split's saving in t->saving (kd_prune.h) */
     int mailbox;        /* mailbox-aware costs (kd_cost_model.mailbox_term) */

@@ -234,18 +234,18 @@ static void run_task(sah_build *w, sah_task *tk)
 }
 
 /* Whether a task of KIND may be taken now: any while the main build is
- * still listing tasks (it is then built in full, as a scout is: the tree is
+ * still listing tasks (it is then built in full, as a pilot is: the tree is
  * the same either way, kd_prune.h, and the thread would otherwise wait for
- * the main build); after that a probe once the scouts' estimate is made,
- * any other once the whole sample's is. */
+ * the main build); after that a pilot at once, any other kind once the
+ * estimate of the kinds before it is made (estimate_and_cut). */
 static int may_take(const sah_pool *pool, int kind)
 {
     return !pool->closed || pool->open[kind];
 }
 
 /* The next task for a thread to build, under the pool's lock: the first of
- * the kinds up to MOST (scouts, then probes, then the others, each in task
- * order) that may be taken; waits while none may. NULL when there is
+ * the kinds up to MOST (pilots, scouts, probes, then the others, each in
+ * task order) that may be taken; waits while none may. NULL when there is
  * nothing more for it: the pool is closed and every task of those kinds
  * taken, or the build failed. */
 static sah_task *take_task(sah_pool *pool, int most)
@@ -535,8 +535,7 @@ static void wait_for_samples(sah_pool *pool)
  * disagree make the least one lower still (teapot:40's scouts lie 16x
  * apart, their least at a quarter of the threshold, and its probes had been
  * built in full: 40 % of the build); the other tasks' cut, near the
- * threshold, waits for the three to agree. ts->raised: the greatest of the
- * cuts given; ts->scout_cut, ts->probe_cut: the scouts' and the probes'. */
+ * threshold, waits for the three to agree. ts->cuts: the cuts given. */
 static bsp_status estimate_and_cut(sah_build *b, sah_pool *pool, sah_build *w, int ready)
 {
     sah_tasks *ts = pool->tasks;
@@ -568,9 +567,9 @@ static bsp_status estimate_and_cut(sah_build *b, sah_pool *pool, sah_build *w, i
         pthread_cond_broadcast(&pool->more);
         pthread_mutex_unlock(&pool->lock);
     }
-    ts->raised = fmax(given[TASK_PILOT], fmax(given[TASK_SCOUT], given[TASK_PROBE]));
-    ts->scout_cut = given[TASK_PILOT];
-    ts->probe_cut = given[TASK_SCOUT];
+    ts->cuts.raised = fmax(given[TASK_PILOT], fmax(given[TASK_SCOUT], given[TASK_PROBE]));
+    ts->cuts.scout = given[TASK_PILOT];
+    ts->cuts.probe = given[TASK_SCOUT];
     return st;
 }
 
@@ -635,7 +634,7 @@ bsp_status kd_sah_finish_tasks(sah_build *b, bsp_status st)
         free(ts->v[i]);
     }
     free(ts->v);
-    ts->v = NULL; /* ts->raised stays for the caller */
+    ts->v = NULL; /* ts->cuts stays for the caller */
     ts->n = ts->cap = 0;
     ts->pool = NULL;
     return st;

@@ -104,13 +104,11 @@ static void root_lists(sah_build *b, size_t m, int threads)
  * with CUT_SHARE > 0, CUT_SHARE times the leaf budget BUDGET's estimate
  * raises the least saving of the tasks built after it, and shares of its
  * pilots' and scouts' estimates those of its scouts and probes
- * (kd_sah_tasks.c): *RAISED, the greatest least saving any task was built
- * with, *PROBE_CUT and *SCOUT_CUT, the probes' and the scouts' (else
- * -inf). The savings are recorded when b->record_savings; the tree is not
- * pruned here. */
+ * (kd_sah_tasks.c): *CUTS. The savings are recorded when b->record_savings;
+ * the tree is not pruned here. */
 static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n, size_t np,
-                             double tsum, size_t budget, double cut_share, double *raised,
-                             double *probe_cut, double *scout_cut)
+                             double tsum, size_t budget, double cut_share,
+                             sah_budget_cuts *cuts)
 {
     kd_tree *t = b->t;
     b->min_saving_sure = b->min_saving;
@@ -139,15 +137,13 @@ static bsp_status build_tree(sah_build *b, const bsp_build_options *o, size_t n,
     tasks.probe_every = cut_share > 0.0 ? KD_BUDGET_PROBE_EVERY : 0;
     tasks.budget = budget;
     tasks.cut_share = cut_share;
-    tasks.raised = tasks.probe_cut = tasks.scout_cut = -INFINITY;
+    tasks.cuts = (sah_budget_cuts){-INFINITY, -INFINITY, -INFINITY};
     b->tasks = &tasks;
     kd_sah_start_workers(b, threads, n);
     double cost;
     bsp_status st = kd_sah_build_node(b, 0, t->box, root, 3 * m, 0, 0, b->surface, &cost);
     st = kd_sah_finish_tasks(b, st);
-    *raised = tasks.raised;
-    *probe_cut = tasks.probe_cut;
-    *scout_cut = tasks.scout_cut;
+    *cuts = tasks.cuts;
     b->tasks = NULL; /* TASKS lives in this frame only */
     kd_sah_scratch_free(b);
     return st;
@@ -284,17 +280,16 @@ bsp_status kd_build_sah_measure(kd_tree *t, const bsp_scene *scene, const bsp_bu
      * saving, so splits it cut might have stayed), once more without. */
     int estimate = b.record_savings && cm.budget_cut > 0.0;
     for (;;) {
-        double raised = -INFINITY, probe_cut = -INFINITY, scout_cut = -INFINITY;
-        st = build_tree(&b, o, n, np, tsum, budget, estimate ? cm.budget_cut : 0.0, &raised,
-                        &probe_cut, &scout_cut);
+        sah_budget_cuts cuts = {-INFINITY, -INFINITY, -INFINITY};
+        st = build_tree(&b, o, n, np, tsum, budget, estimate ? cm.budget_cut : 0.0, &cuts);
         if (st != BSP_OK || !b.record_savings)
             break;
-        int r = kd_prune_to_leaves(t, budget, raised);
+        int r = kd_prune_to_leaves(t, budget, cuts.raised);
         if (r == 0)
             st = oom(&b);
-        t->budget_cut = r > 0 ? raised : -INFINITY;
-        t->budget_probe_cut = r > 0 ? probe_cut : -INFINITY;
-        t->budget_scout_cut = r > 0 ? scout_cut : -INFINITY;
+        t->budget_cut = r > 0 ? cuts.raised : -INFINITY;
+        t->budget_probe_cut = r > 0 ? cuts.probe : -INFINITY;
+        t->budget_scout_cut = r > 0 ? cuts.scout : -INFINITY;
         if (r >= 0 || !estimate)
             break;
         estimate = 0; /* the estimate was too high: the tree without it */
